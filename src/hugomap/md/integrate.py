@@ -1,0 +1,263 @@
+"""Velocity-Verlet time loop with reflecting walls, Verlet-list rebuilds and the CSVR thermostat.
+
+One step (Verlet 1967; Swope et al., J. Chem. Phys. 76, 637 (1982)), m = 1:
+    v ← v + ½Δt F;  x ← x + Δt v;  walls, wrap;  (rebuild list if needed);  F ← F(x);
+    v ← v + ½Δt F;  (thermostat)
+
+Walls: planes normal to x at x_L(t) = x_L + v_L t and x_R(t) = x_R + v_R t. An atom that
+crossed one is reflected specularly in the wall's frame: x ← 2 x_w − x, v_x ← 2 v_w − v_x
+(as LAMMPS ``fix wall/reflect``; a moving wall is the rigid piston). The momentum handed to
+the atoms is accumulated, so the piston pressure is impulse / (area · time).
+
+Thermostat (only to prepare samples and for the equilibrium reference): canonical
+stochastic velocity rescaling, Bussi, Donadio & Parrinello, J. Chem. Phys. 126, 014101 (2007),
+eq. (A7): with c = exp(−Δt/τ), K the kinetic energy, K_t = ½ N_f T,
+    α² = c + (1 − c)(S + R₁²) K_t/(N_f K) + 2 R₁ √(c (1 − c) K_t/(N_f K)),
+R₁ standard normal, S chi-squared with N_f − 1 degrees of freedom; v ← α v. The random
+numbers are drawn in Python from a seeded generator and passed in, so runs are reproducible.
+
+Status codes returned by ``run_steps``: 0 done, 1 neighbour list too short (grow and go on),
+2 NaN or infinite coordinates, 3 step too long (an atom moved more than skin/2 in one step:
+the list cannot be trusted, reduce Δt), 4 an atom left the box through a wall.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..numba_conf import njit, pjit, prange
+from .forces import forces_full, forces_half
+from .neighbor import build_full_list, cell_of, counting_sort, half_from_full
+
+OK, GROW, NAN, CFL, LOST = 0, 1, 2, 3, 4
+STATUS_NAMES = {OK: "ok", GROW: "grow", NAN: "nan", CFL: "cfl", LOST: "atom_lost"}
+
+
+@pjit
+def kick(v: np.ndarray, f: np.ndarray, h: float) -> None:
+    """v ← v + h F (m = 1)."""
+    for i in prange(v.shape[0]):
+        v[i, 0] += h * f[i, 0]
+        v[i, 1] += h * f[i, 1]
+        v[i, 2] += h * f[i, 2]
+
+
+@njit
+def drift_walls_wrap(
+    x: np.ndarray,
+    v: np.ndarray,
+    x_ref: np.ndarray,
+    dt: float,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    walls: np.ndarray,
+    impulse: np.ndarray,
+) -> tuple[float, float, int]:
+    """x ← x + Δt v, reflect at the walls, wrap periodic dimensions.
+
+    ``walls`` = [x_L, v_L, x_R, v_R] at the end of the step; ``impulse`` (2,) accumulates the
+    x-momentum given to atoms by the left and right wall. Returns the largest squared
+    displacement since the last list build, the largest squared one-step move, and 1 if an
+    atom is NaN or outside the box.
+    """
+    n = x.shape[0]
+    xl, vl, xr, vr = walls[0], walls[1], walls[2], walls[3]
+    bad = 0
+    max_d2 = 0.0
+    max_step2 = 0.0
+    for i in range(n):
+        s2 = 0.0
+        for d in range(3):
+            dxd = dt * v[i, d]
+            s2 += dxd * dxd
+            x[i, d] += dxd
+        if s2 > max_step2 or s2 != s2:
+            max_step2 = s2 if s2 == s2 else np.inf
+        if not periodic[0]:
+            if x[i, 0] < xl:
+                impulse[0] += 2.0 * (vl - v[i, 0])
+                x[i, 0] = 2.0 * xl - x[i, 0]
+                v[i, 0] = 2.0 * vl - v[i, 0]
+            elif x[i, 0] > xr:
+                impulse[1] += 2.0 * (vr - v[i, 0])
+                x[i, 0] = 2.0 * xr - x[i, 0]
+                v[i, 0] = 2.0 * vr - v[i, 0]
+        d2 = 0.0
+        for d in range(3):
+            if periodic[d]:
+                x[i, d] -= L[d] * np.floor(x[i, d] / L[d])
+                dd = x[i, d] - x_ref[i, d]
+                dd -= L[d] * np.rint(dd / L[d])
+            else:
+                dd = x[i, d] - x_ref[i, d]
+            d2 += dd * dd
+            if not (x[i, d] >= 0.0 and x[i, d] <= L[d]):
+                bad = 1
+        if d2 > max_d2:
+            max_d2 = d2
+    return max_d2, max_step2, bad
+
+
+@njit
+def sort_by_cell(
+    x: np.ndarray, v: np.ndarray, f: np.ndarray, ids: np.ndarray, L: np.ndarray, nc: np.ndarray
+) -> np.ndarray:
+    """Reorder atoms by cell (stable counting sort) in place; return the cell offsets."""
+    cell = cell_of(x, L, nc)
+    order, start = counting_sort(cell, nc[0] * nc[1] * nc[2])
+    x[:] = x[order]
+    v[:] = v[order]
+    f[:] = f[order]
+    ids[:] = ids[order]
+    return start
+
+
+@njit
+def rebuild(
+    x: np.ndarray,
+    v: np.ndarray,
+    f: np.ndarray,
+    ids: np.ndarray,
+    x_ref: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    nc: np.ndarray,
+    rlist2: float,
+    nbr: np.ndarray,
+    nnb: np.ndarray,
+    use_half: bool,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+    sort: bool,
+) -> int:
+    """Sort atoms by cell (if ``sort``), build the list, remember x_ref; return the row need."""
+    if sort:
+        start = sort_by_cell(x, v, f, ids, L, nc)
+    else:
+        start = counting_sort(cell_of(x, L, nc), nc[0] * nc[1] * nc[2])[1]
+    need = build_full_list(x, L, periodic, nc, start, rlist2, nbr, nnb)
+    if need <= nbr.shape[1] and use_half:
+        half_from_full(nbr, nnb, half, nhalf)
+    x_ref[:] = x
+    return need
+
+
+@njit
+def compute_forces(
+    x: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    nbr: np.ndarray,
+    nnb: np.ndarray,
+    use_half: bool,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+    rc2: float,
+    f: np.ndarray,
+) -> None:
+    """Forces from the half list (one thread) or the full list (several)."""
+    if use_half:
+        forces_half(x, L, periodic, half, nhalf, rc2, f)
+    else:
+        forces_full(x, L, periodic, nbr, nnb, rc2, f)
+
+
+@njit
+def csvr_factor(kin: float, target: float, nf: int, c: float, r1: float, s: float) -> float:
+    """Bussi–Donadio–Parrinello velocity scale α (eq. A7) for kinetic energy ``kin``."""
+    if kin <= 0.0:
+        return 1.0
+    ratio = target / (nf * kin)
+    a2 = c + (1.0 - c) * (s + r1 * r1) * ratio + 2.0 * r1 * np.sqrt(c * (1.0 - c) * ratio)
+    sign = 1.0 if r1 + np.sqrt(c / ((1.0 - c) * ratio)) >= 0.0 else -1.0
+    return sign * np.sqrt(max(a2, 0.0))
+
+
+@njit
+def run_steps(
+    nsteps: int,
+    x: np.ndarray,
+    v: np.ndarray,
+    f: np.ndarray,
+    ids: np.ndarray,
+    x_ref: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    walls0: np.ndarray,
+    t0: float,
+    dt: float,
+    rc2: float,
+    rlist2: float,
+    half_skin2: float,
+    nc: np.ndarray,
+    nbr: np.ndarray,
+    nnb: np.ndarray,
+    use_half: bool,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+    impulse: np.ndarray,
+    thermo: np.ndarray,
+    r1: np.ndarray,
+    chi: np.ndarray,
+    counters: np.ndarray,
+) -> tuple[int, int]:
+    """Advance up to ``nsteps`` velocity-Verlet steps; return (steps completed, status).
+
+    ``walls0`` = [x_L0, v_L, x_R0, v_R]: wall positions at t = 0 and their velocities, so the
+    wall position at time t is x_w0 + v_w t, exact for any restart. ``thermo`` = [T, τ, N_f]
+    (T ≤ 0: no thermostat) with ``r1``/``chi`` the per-step random numbers. ``counters``
+    [0] counts list builds. On status GROW the step is half done: the caller grows the list,
+    rebuilds, and calls ``finish_step``.
+    """
+    walls = np.empty(4)
+    for s in range(nsteps):
+        t = t0 + (s + 1) * dt
+        walls[0] = walls0[0] + walls0[1] * t
+        walls[1] = walls0[1]
+        walls[2] = walls0[2] + walls0[3] * t
+        walls[3] = walls0[3]
+        kick(v, f, 0.5 * dt)
+        max_d2, max_step2, bad = drift_walls_wrap(x, v, x_ref, dt, L, periodic, walls, impulse)
+        if max_step2 != max_step2 or max_d2 != max_d2 or np.isinf(max_step2):
+            return s, NAN
+        if max_step2 > half_skin2:
+            return s, CFL
+        if bad:
+            return s, LOST
+        if max_d2 > half_skin2:
+            need = rebuild(
+                x, v, f, ids, x_ref, L, periodic, nc, rlist2, nbr, nnb, use_half, half, nhalf, True
+            )
+            counters[0] += 1
+            if need > nbr.shape[1]:
+                return s, GROW
+        finish_step(x, v, f, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, dt, thermo, r1[s], chi[s])
+    return nsteps, OK
+
+
+@njit
+def finish_step(
+    x: np.ndarray,
+    v: np.ndarray,
+    f: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    nbr: np.ndarray,
+    nnb: np.ndarray,
+    use_half: bool,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+    rc2: float,
+    dt: float,
+    thermo: np.ndarray,
+    r1: float,
+    chi: float,
+) -> None:
+    """Second half of a step: F(x), v ← v + ½Δt F, then the thermostat if one is set."""
+    compute_forces(x, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, f)
+    kick(v, f, 0.5 * dt)
+    if thermo[0] > 0.0:
+        kin = 0.5 * np.sum(v * v)
+        nf = int(thermo[2])
+        alpha = csvr_factor(kin, 0.5 * nf * thermo[0], nf, np.exp(-dt / thermo[1]), r1, chi)
+        v *= alpha

@@ -1,0 +1,62 @@
+"""The Lennard-Jones 12-6 pair potential, truncated (and optionally shifted) at ``rc``.
+
+    U(r) = 4 ε [(σ/r)^12 − (σ/r)^6] − U_c,   r < rc;   U(r) = 0,   r ≥ rc,
+    U_c  = 4 ε [(σ/rc)^12 − (σ/rc)^6] if shifted, else 0.
+
+All quantities are in Lennard-Jones reduced units (σ = ε = m = 1, τ = σ√(m/ε)). The shift
+makes U continuous at rc (forces are unchanged), so NVE energy is conserved; without it the
+total energy jumps by U(rc) whenever a pair crosses the cutoff (see ../shared/FACTS.md).
+The potential (rc and the shift) defines the Hugoniot: every dataset records both.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..numba_conf import njit
+
+
+@dataclass(frozen=True)
+class LJParams:
+    """Reduced-unit LJ parameters: cutoff ``rc`` [σ], ``shift`` (U(rc) subtracted), ``skin`` [σ]."""
+
+    rc: float = 2.5
+    shift: bool = True
+    skin: float = 0.3
+
+    def __post_init__(self) -> None:
+        if not (0.5 < self.rc <= 10.0):
+            raise ValueError(f"potential.rc = {self.rc}: allowed range (0.5, 10] sigma")
+        if not (0.0 < self.skin <= 2.0):
+            raise ValueError(f"md.skin = {self.skin}: allowed range (0, 2] sigma")
+
+    @property
+    def ushift(self) -> float:
+        """U_c [ε]: the value subtracted so that U(rc) = 0 when shifted."""
+        return lj_energy_unshifted(self.rc * self.rc) if self.shift else 0.0
+
+    @property
+    def rlist(self) -> float:
+        """Verlet-list radius rc + skin [σ]."""
+        return self.rc + self.skin
+
+
+@njit
+def lj_energy_unshifted(r2: float) -> float:
+    """U(r) = 4(r^-12 − r^-6) [ε] for squared distance ``r2`` [σ²] (no cutoff)."""
+    inv6 = 1.0 / (r2 * r2 * r2)
+    return 4.0 * inv6 * (inv6 - 1.0)
+
+
+@njit
+def lj_pair(r2: float, rc2: float, ushift: float) -> tuple[float, float]:
+    """Energy U(r) [ε] and F(r)/r = −(dU/dr)/r [ε σ⁻²] of one pair, zero beyond ``rc``.
+
+    F/r = 48 r^-14 − 24 r^-8 = 24 r^-2 r^-6 (2 r^-6 − 1). Multiply by the separation vector
+    r_i − r_j to get the force on i.
+    """
+    if r2 >= rc2:
+        return 0.0, 0.0
+    inv2 = 1.0 / r2
+    inv6 = inv2 * inv2 * inv2
+    return 4.0 * inv6 * (inv6 - 1.0) - ushift, 24.0 * inv2 * inv6 * (2.0 * inv6 - 1.0)

@@ -1,0 +1,355 @@
+"""The LJ molecular-dynamics simulation: state, time loop driver, samples, checkpoints.
+
+``MDSimulation`` owns its state (a dataclass of arrays) and its time loop; the shock methods
+drive it through ``advance``, ``set_walls``, ``galilean_shift``, ``profile_sums`` and
+``save``/``load``. Reduced LJ units throughout (σ, ε, m, τ = σ√(m/ε), k_B = 1).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .. import __version__
+from ..io.atomic import write_netcdf
+from ..numba_conf import num_threads
+from . import integrate as ig
+from .forces import energy_virial_full
+from .neighbor import build_full_list, cell_of, counting_sort, grid_shape
+from .potential import LJParams
+from .profiles import SUM_FIELDS, bin_sums
+
+CHECKPOINT_FORMAT = "hugomap-md-checkpoint/1"
+
+
+class SolverUnstable(RuntimeError):
+    """The solver stopped: ``status`` names why (nan, cfl, atom_lost, ...), ``diagnostic`` how."""
+
+    def __init__(self, status: str, diagnostic: str):
+        super().__init__(f"{status}: {diagnostic}")
+        self.status = status
+        self.diagnostic = diagnostic
+
+
+@dataclass
+class MDState:
+    """Complete dynamical state of an MD run (arrays of shape (n, 3) unless stated).
+
+    x, v, f: positions [σ], velocities [σ/τ], forces [ε/σ]; ids (n,) stable atom labels;
+    x_ref: positions at the last neighbour-list build; L (3,) box lengths [σ]; periodic (3,)
+    bool; walls0 (4,) = [x_L0, v_L, x_R0, v_R] so that wall k sits at x_k0 + v_k t;
+    time [τ]; step; impulse (2,) x-momentum given by the left/right wall [m σ/τ].
+    """
+
+    x: np.ndarray
+    v: np.ndarray
+    L: np.ndarray
+    periodic: np.ndarray
+    walls0: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 0.0, 0.0]))
+    f: np.ndarray | None = None
+    ids: np.ndarray | None = None
+    x_ref: np.ndarray | None = None
+    time: float = 0.0
+    step: int = 0
+    impulse: np.ndarray = field(default_factory=lambda: np.zeros(2))
+
+    def __post_init__(self) -> None:
+        n = self.x.shape[0]
+        self.x = np.ascontiguousarray(self.x, dtype=np.float64)
+        self.v = np.ascontiguousarray(self.v, dtype=np.float64)
+        self.L = np.asarray(self.L, dtype=np.float64)
+        self.periodic = np.asarray(self.periodic, dtype=np.bool_)
+        self.walls0 = np.asarray(self.walls0, dtype=np.float64)
+        if self.f is None:
+            self.f = np.zeros((n, 3))
+        if self.ids is None:
+            self.ids = np.arange(n, dtype=np.int64)
+        if self.x_ref is None:
+            self.x_ref = self.x.copy()
+
+    @property
+    def n(self) -> int:
+        return int(self.x.shape[0])
+
+
+class MDSimulation:
+    """Velocity-Verlet MD of an LJ system in a box with walls in x (or periodic in x).
+
+    Parameters: ``state`` (MDState), ``lj`` (LJParams), ``dt`` [τ], optional thermostat
+    temperature ``T_bath`` [ε/k_B] and time constant ``tau_bath`` [τ] (CSVR), ``seed``.
+    """
+
+    def __init__(
+        self,
+        state: MDState,
+        lj: LJParams,
+        dt: float,
+        T_bath: float | None = None,
+        tau_bath: float = 0.5,
+        seed: int = 0,
+    ):
+        if not dt > 0:
+            raise ValueError(f"dt = {dt}: must be > 0 tau")
+        self.state = state
+        self.lj = lj
+        self.dt = float(dt)
+        self.T_bath = T_bath
+        self.tau_bath = float(tau_bath)
+        self.seed = int(seed)
+        self.use_half = num_threads() == 1
+        self.list_builds = 0
+        for d in range(3):
+            if state.periodic[d] and state.L[d] < 2.0 * lj.rlist:
+                raise ValueError(
+                    f"box length L[{'xyz'[d]}] = {state.L[d]:.4g} sigma is shorter than "
+                    f"2 (rc + skin) = {2 * lj.rlist:.4g} sigma: the minimum image fails"
+                )
+        self.nc = grid_shape(state.L, lj.rlist)
+        density = state.n / float(np.prod(state.L))
+        est = 4.0 / 3.0 * math.pi * lj.rlist**3 * density
+        self._alloc_lists(int(est * 1.5) + 16)
+        self._build_list(sort=True)
+        ig.compute_forces(*self._force_args(), self.state.f)
+
+    # -- neighbour lists -------------------------------------------------------------------
+    def _alloc_lists(self, maxnb: int) -> None:
+        n = self.state.n
+        self.nbr = np.zeros((n, maxnb), dtype=np.int32)
+        self.nnb = np.zeros(n, dtype=np.int32)
+        hmax = maxnb // 2 + 16 if self.use_half else 1
+        self.half = np.zeros((n if self.use_half else 1, hmax), dtype=np.int32)
+        self.nhalf = np.zeros(n if self.use_half else 1, dtype=np.int32)
+
+    def _build_list(self, sort: bool) -> None:
+        """(Re)build the list; ``sort=False`` rebuilds exactly the list made at x_ref."""
+        s = self.state
+        while True:
+            if sort:
+                need = ig.rebuild(
+                    s.x, s.v, s.f, s.ids, s.x_ref, s.L, s.periodic, self.nc,
+                    self.lj.rlist**2, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, True,
+                )  # fmt: skip
+                sort = False
+            else:
+                start = counting_sort(cell_of(s.x_ref, s.L, self.nc), int(np.prod(self.nc)))[1]
+                need = build_full_list(
+                    s.x_ref, s.L, s.periodic, self.nc, start, self.lj.rlist**2, self.nbr, self.nnb
+                )
+                if need <= self.nbr.shape[1] and self.use_half:
+                    ig.half_from_full(self.nbr, self.nnb, self.half, self.nhalf)
+            if need <= self.nbr.shape[1]:
+                self.list_builds += 1
+                return
+            self._alloc_lists(int(need * 1.3) + 8)
+
+    def _force_args(self) -> tuple:
+        s = self.state
+        return (
+            s.x, s.L, s.periodic, self.nbr, self.nnb, self.use_half, self.half, self.nhalf,
+            self.lj.rc**2,
+        )  # fmt: skip
+
+    # -- time loop ---------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        return self.state.time
+
+    @property
+    def n_particles(self) -> int:
+        return self.state.n
+
+    def _thermo_numbers(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        nf = 3 * self.state.n - (3 if self.state.periodic.all() else 0)
+        if self.T_bath is None:
+            return np.zeros(3), np.zeros(n), np.zeros(n), nf
+        r1 = np.empty(n)
+        chi = np.empty(n)
+        for k in range(n):
+            # One generator per absolute step: the stream does not depend on how the run is
+            # split into advance() calls, so a resumed run draws the same numbers.
+            g = np.random.default_rng([self.seed, self.state.step + k])
+            r1[k] = g.standard_normal()
+            chi[k] = g.chisquare(nf - 1)
+        return np.array([self.T_bath, self.tau_bath, float(nf)]), r1, chi, nf
+
+    def advance(self, n_steps: int) -> None:
+        """Run ``n_steps`` velocity-Verlet steps; raise SolverUnstable if the run breaks."""
+        s = self.state
+        done_total = 0
+        thermo, r1, chi, _ = self._thermo_numbers(n_steps)
+        counters = np.zeros(1, dtype=np.int64)
+        while done_total < n_steps:
+            done, code = ig.run_steps(
+                n_steps - done_total, s.x, s.v, s.f, s.ids, s.x_ref, s.L, s.periodic, s.walls0,
+                s.time, self.dt, self.lj.rc**2, self.lj.rlist**2, (0.5 * self.lj.skin) ** 2,
+                self.nc, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, s.impulse,
+                thermo, r1[done_total:], chi[done_total:], counters,
+            )  # fmt: skip
+            s.time = s.time + done * self.dt
+            s.step += done
+            done_total += done
+            if code == ig.OK:
+                break
+            if code == ig.GROW:
+                # The step in progress is half done: grow the list and finish it.
+                self._alloc_lists(int(self.nbr.shape[1] * 1.5) + 8)
+                self._build_list(sort=False)
+                ig.finish_step(
+                    *self._force_args()[:-1], self.lj.rc**2, self.dt, thermo,
+                    r1[done_total], chi[done_total],
+                )  # fmt: skip
+                s.time = s.time + self.dt
+                s.step += 1
+                done_total += 1
+                continue
+            raise SolverUnstable(ig.STATUS_NAMES[code], self._diagnose(code))
+        self.list_builds += int(counters[0])
+
+    def _diagnose(self, code: int) -> str:
+        s = self.state
+        vmax = float(np.nanmax(np.abs(s.v))) if np.isfinite(s.v).any() else float("nan")
+        msg = f"at step {s.step}, t = {s.time:.4f} tau, max |v| = {vmax:.4g} sigma/tau"
+        if code == ig.CFL:
+            msg += (
+                f"; an atom moved more than skin/2 = {0.5 * self.lj.skin} sigma in one step of "
+                f"dt = {self.dt} tau: reduce dt or the shock strength"
+            )
+        elif code == ig.LOST:
+            msg += "; an atom left the box (it crossed a wall in one step)"
+        elif code == ig.NAN:
+            msg += "; NaN or infinite coordinates"
+        return msg
+
+    # -- boundaries --------------------------------------------------------------------------
+    def wall_positions(self) -> tuple[float, float]:
+        """Current positions of the left and right walls [σ]."""
+        w, t = self.state.walls0, self.state.time
+        return float(w[0] + w[1] * t), float(w[2] + w[3] * t)
+
+    def set_walls(self, v_left: float, v_right: float) -> None:
+        """Set wall velocities [σ/τ], keeping their current positions."""
+        xl, xr = self.wall_positions()
+        t = self.state.time
+        self.state.walls0[:] = [xl - v_left * t, v_left, xr - v_right * t, v_right]
+
+    def galilean_shift(self, du: float) -> None:
+        """Add ``du`` [σ/τ] to every x velocity and to both wall velocities."""
+        self.state.v[:, 0] += du
+        w = self.state.walls0
+        self.set_walls(w[1] + du, w[3] + du)
+
+    # -- observables -------------------------------------------------------------------------
+    def per_atom_energy_virial(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per-atom potential energy (n,) [ε] and virial (n, 6) [ε] at the current positions."""
+        s = self.state
+        pe = np.empty(s.n)
+        vir = np.empty((s.n, 6))
+        energy_virial_full(
+            s.x, s.L, s.periodic, self.nbr, self.nnb, self.lj.rc**2, self.lj.ushift, pe, vir
+        )
+        return pe, vir
+
+    def profile_sums(self, width: float) -> np.ndarray:
+        """Raw per-bin sums (nbins, len(SUM_FIELDS)) over slabs of ``width`` [σ] along x."""
+        s = self.state
+        nbins = int(math.floor(s.L[0] / width + 1e-9))
+        out = np.zeros((nbins, len(SUM_FIELDS)))
+        pe, vir = self.per_atom_energy_virial()
+        bin_sums(s.x, s.v, pe, vir, width, out)
+        return out
+
+    def energies(self) -> tuple[float, float]:
+        """Total kinetic and potential energy [ε]."""
+        pe, _ = self.per_atom_energy_virial()
+        return 0.5 * float(np.sum(self.state.v**2)), float(np.sum(pe))
+
+    def momentum(self) -> np.ndarray:
+        """Total momentum (3,) [m σ/τ]."""
+        return self.state.v.sum(axis=0)
+
+    # -- checkpoints -------------------------------------------------------------------------
+    def to_dataset(self, extra: xr.Dataset | None = None, attrs: dict | None = None) -> xr.Dataset:
+        """The complete state as an xarray Dataset (see ``save``)."""
+        s = self.state
+        dims = ("atom", "xyz")
+        ds = xr.Dataset(
+            {
+                "x": (dims, s.x, {"units": "sigma", "long_name": "position"}),
+                "v": (dims, s.v, {"units": "sigma tau^-1", "long_name": "velocity"}),
+                "f": (dims, s.f, {"units": "epsilon sigma^-1", "long_name": "force"}),
+                "x_ref": (dims, s.x_ref, {"units": "sigma", "long_name": "positions at last list build"}),
+                "ids": (("atom",), s.ids, {"units": "1", "long_name": "atom label"}),
+                "L": (("xyz",), s.L, {"units": "sigma", "long_name": "box lengths"}),
+                "periodic": (("xyz",), s.periodic.astype(np.int8), {"units": "1", "long_name": "periodic flags"}),
+                "walls0": (("wall_param",), s.walls0, {"units": "sigma, sigma tau^-1", "long_name": "[x_L0, v_L, x_R0, v_R]"}),
+                "impulse": (("wall",), s.impulse, {"units": "m sigma tau^-1", "long_name": "x momentum given by left/right wall"}),
+            },
+            coords={"xyz": ["x", "y", "z"]},
+        )  # fmt: skip
+        if extra is not None:
+            ds = ds.merge(extra)
+        ds.attrs.update(
+            format=CHECKPOINT_FORMAT,
+            time=float(s.time),
+            step=int(s.step),
+            dt=self.dt,
+            lj=json.dumps({"rc": self.lj.rc, "shift": self.lj.shift, "skin": self.lj.skin}),
+            thermostat=json.dumps(
+                None if self.T_bath is None else {"T": self.T_bath, "tau": self.tau_bath}
+            ),
+            seed=self.seed,
+            numba_threads=num_threads(),
+            hugomap_version=__version__,
+        )
+        ds.attrs.update(attrs or {})
+        return ds
+
+    def save(self, path: str | os.PathLike, extra: xr.Dataset | None = None, attrs: dict | None = None) -> Path:
+        """Save the complete state (and ``extra`` variables) to netCDF, atomically."""
+        return write_netcdf(self.to_dataset(extra, attrs), path)
+
+    @classmethod
+    def from_dataset(cls, ds: xr.Dataset) -> MDSimulation:
+        """Rebuild a simulation that continues bit-for-bit from a saved state.
+
+        The neighbour list is rebuilt from x_ref (where it was built) without re-sorting, and
+        the saved forces are kept, so the next step is the one the original run would take.
+        """
+        if ds.attrs.get("format") != CHECKPOINT_FORMAT:
+            raise ValueError(f"not an MD checkpoint (format {ds.attrs.get('format')!r})")
+        state = MDState(
+            x=ds["x"].values.copy(), v=ds["v"].values.copy(), L=ds["L"].values.copy(),
+            periodic=ds["periodic"].values.astype(bool), walls0=ds["walls0"].values.copy(),
+            f=ds["f"].values.copy(), ids=ds["ids"].values.astype(np.int64),
+            x_ref=ds["x_ref"].values.copy(), time=float(ds.attrs["time"]),
+            step=int(ds.attrs["step"]), impulse=ds["impulse"].values.copy(),
+        )  # fmt: skip
+        lj = LJParams(**json.loads(ds.attrs["lj"]))
+        th = json.loads(ds.attrs["thermostat"])
+        sim = cls.__new__(cls)
+        sim.state = state
+        sim.lj = lj
+        sim.dt = float(ds.attrs["dt"])
+        sim.T_bath = None if th is None else th["T"]
+        sim.tau_bath = 0.5 if th is None else th["tau"]
+        sim.seed = int(ds.attrs["seed"])
+        sim.use_half = num_threads() == 1
+        sim.list_builds = 0
+        sim.nc = grid_shape(state.L, lj.rlist)
+        density = state.n / float(np.prod(state.L))
+        sim._alloc_lists(int(4.0 / 3.0 * math.pi * lj.rlist**3 * density * 1.5) + 16)
+        sim._build_list(sort=False)
+        return sim
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> MDSimulation:
+        """Load a checkpoint written by ``save``."""
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            ds.load()
+        return cls.from_dataset(ds)

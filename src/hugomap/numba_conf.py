@@ -1,0 +1,35 @@
+"""Numba flags, in one place (PySDM habit).
+
+``cache=True`` matters here: every Snakemake job is a fresh Python process, so without an
+on-disk cache every job would recompile every kernel. ``fastmath`` lets LLVM vectorise the
+branch-free pair loops; ``error_model='numpy'`` removes the division-by-zero checks.
+Set ``NUMBA_DISABLE_JIT=1`` to run every kernel as plain Python (the unit tests do).
+"""
+
+from __future__ import annotations
+
+import numba
+
+JIT_FLAGS: dict = {"cache": True, "fastmath": True, "error_model": "numpy", "nogil": True}
+PARALLEL_FLAGS: dict = {**JIT_FLAGS, "parallel": True}
+
+
+def njit(func):
+    """Compile ``func`` serially with the project's flags."""
+    return numba.njit(**JIT_FLAGS)(func)
+
+
+def pjit(func):
+    """Compile ``func`` with ``parallel=True`` (``prange`` loops run on numba's threads)."""
+    return numba.njit(**PARALLEL_FLAGS)(func)
+
+
+prange = numba.prange
+
+
+def num_threads() -> int:
+    """Number of numba threads in use (1 when the JIT is disabled)."""
+    try:
+        return int(numba.get_num_threads())
+    except Exception:  # pragma: no cover - numba without threading layer
+        return 1
