@@ -122,7 +122,8 @@ class MDSimulation:
         n = self.state.n
         self.nbr = np.zeros((n, maxnb), dtype=np.int32)
         self.nnb = np.zeros(n, dtype=np.int32)
-        hmax = maxnb // 2 + 16 if self.use_half else 1
+        # A half row (j > i) can be as long as a full one for the first atoms in sorted order.
+        hmax = maxnb if self.use_half else 1
         self.half = np.zeros((n if self.use_half else 1, hmax), dtype=np.int32)
         self.nhalf = np.zeros(n if self.use_half else 1, dtype=np.int32)
 

@@ -1,0 +1,164 @@
+"""netCDF layout of Hugoniot points and per-scene aggregates (the only place that knows it).
+
+A point file holds scalar variables (value and ``_err`` standard error) with ``units`` and
+``long_name``, the point's ``status`` and ``diagnostic``, its cost, and the front history.
+The aggregate ``results/hugoniot/<scene>.nc`` has dimensions ``scheme`` × ``u_p`` (the
+nominal piston velocity); the pole, the model and the resolved config travel with it.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .. import __version__
+from ..config import config_hash
+
+P_UNIT = "epsilon sigma^-3"
+POINT_VARS: dict[str, tuple[str, str]] = {
+    "D": ("sigma tau^-1", "shock velocity relative to the upstream material"),
+    "u_p_measured": ("sigma tau^-1", "measured particle-velocity jump across the front"),
+    "rho": ("sigma^-3", "number density behind the front"),
+    "V": ("sigma^3", "specific volume behind the front (per atom, m = 1)"),
+    "P": (P_UNIT, "longitudinal stress behind the front, P_xx = -sigma_xx"),
+    "Pyy": (P_UNIT, "transverse stress behind the front, P_yy"),
+    "Pzz": (P_UNIT, "transverse stress behind the front, P_zz"),
+    "P_rh": (P_UNIT, "Rayleigh-line pressure P0 + rho0 D u_p"),
+    "T": ("epsilon k_B^-1", "temperature behind the front"),
+    "E": ("epsilon", "specific internal energy behind the front (per atom)"),
+    "E_minus_E0": ("epsilon", "specific internal energy jump E - E0"),
+    "shear_stress": (P_UNIT, "(P_xx - (P_yy + P_zz)/2) / 2 behind the front"),
+    "residual_mass": ("1", "relative residual of rho0 D = rho (D - u_p)"),
+    "residual_momentum": ("1", "relative residual of P - P0 = rho0 D u_p"),
+    "residual_energy": ("1", "relative residual of E - E0 = (P + P0)(V0 - V)/2"),
+    "n_samples": ("1", "profile samples averaged"),
+    "wall_s": ("s", "wall-clock time of the point (load + drive)"),
+    "cpu_s": ("s", "CPU time of the point (load + drive), all threads"),
+    "atom_steps": ("1", "atoms x time steps of the point (load + drive)"),
+    "piston_velocity": ("sigma tau^-1", "nominal piston velocity"),
+}
+POLE_VARS: dict[str, tuple[str, str]] = {
+    "rho0": ("sigma^-3", "pole: number density of the prepared sample"),
+    "P0": (P_UNIT, "pole: longitudinal stress P_xx of the prepared sample"),
+    "E0": ("epsilon", "pole: specific internal energy of the prepared sample"),
+    "T0": ("epsilon k_B^-1", "pole: temperature of the prepared sample"),
+    "Pyy0": (P_UNIT, "pole: transverse stress P_yy of the prepared sample"),
+}
+ERR_SUFFIX = "_err"
+POINT_TEXT = {
+    "status": "ok, not_converged, or why the run stopped",
+    "diagnostic": "what happened, for a failed or unconverged point",
+}
+
+
+def git_commit(path: str | Path = ".") -> str:
+    """The git commit of the working tree at ``path`` (``unknown`` outside git)."""
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=path, capture_output=True, text=True, timeout=10
+        )
+        return out.stdout.strip() or "unknown"
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def scalar_vars(values: dict, table: dict[str, tuple[str, str]]) -> dict[str, xr.Variable]:
+    """Scalar variables (and ``_err`` companions) for every key of ``table`` in ``values``."""
+    out = {}
+    for name, (units, long_name) in table.items():
+        if name in values:
+            out[name] = xr.Variable((), float(values[name]), {"units": units, "long_name": long_name})
+        if name + ERR_SUFFIX in values:
+            out[name + ERR_SUFFIX] = xr.Variable(
+                (),
+                float(values[name + ERR_SUFFIX]),
+                {"units": units, "long_name": f"standard error of {name} (block averages)"},
+            )
+    return out
+
+
+def provenance_attrs(config: dict | None) -> dict[str, str]:
+    """Resolved config (JSON), its hash, the package version and the git commit."""
+    cfg = config or {}
+    return {
+        "config_json": json.dumps(cfg, sort_keys=True),
+        "config_hash": config_hash(cfg),
+        "hugomap_version": __version__,
+        "git_commit": git_commit(Path(__file__).parent),
+    }
+
+
+def point_dataset(
+    values: dict,
+    pole: dict,
+    history: dict[str, np.ndarray] | None,
+    scheme: str,
+    scene: str,
+    status: str,
+    diagnostic: str,
+    scene_config: dict,
+) -> xr.Dataset:
+    """One Hugoniot point as a Dataset (NaN-filled where a failed run has no value)."""
+    vals = {k: values.get(k, np.nan) for k in POINT_VARS}
+    vals.update({k + ERR_SUFFIX: values.get(k + ERR_SUFFIX, np.nan) for k in POINT_VARS if k + ERR_SUFFIX in values})
+    data = scalar_vars(vals, POINT_VARS)
+    data.update(scalar_vars(pole, POLE_VARS))
+    data["converged"] = xr.Variable((), np.int8(bool(values.get("converged", False))), {"units": "1", "long_name": "1 if every jump residual is within tolerance"})
+    data["status"] = xr.Variable((), str(status), {"long_name": POINT_TEXT["status"]})
+    data["diagnostic"] = xr.Variable((), str(diagnostic), {"long_name": POINT_TEXT["diagnostic"]})
+    if history is not None and len(history.get("t", [])):
+        data["history_t"] = xr.Variable(("sample",), history["t"], {"units": "tau", "long_name": "sample time"})
+        data["history_front"] = xr.Variable(("sample",), history["front"], {"units": "sigma", "long_name": "front position (piston frame)"})
+        data["history_stage"] = xr.Variable(("sample",), history["stage"], {"units": "1", "long_name": "0 load, 1 drive"})
+    ds = xr.Dataset(data)
+    ds.attrs.update(scheme=scheme, scene=scene, scene_config=json.dumps(scene_config, sort_keys=True))
+    return ds
+
+
+def aggregate_points(
+    paths: Sequence[str | Path],
+    scheme: str,
+    reference: xr.Dataset | None,
+    config: dict,
+    scene: str,
+) -> xr.Dataset:
+    """Join point files (lazily, with dask) into one dataset with dims ``scheme`` × ``u_p``."""
+    keep = [k for k in (*POINT_VARS, *(k + ERR_SUFFIX for k in POINT_VARS)) if k != "piston_velocity"]
+    # The dimension u_p is the nominal piston velocity; the measured jump is u_p_measured.
+    ds = xr.open_mfdataset(
+        [str(p) for p in paths],
+        combine="nested",
+        concat_dim="u_p",
+        data_vars="all",
+        coords="minimal",
+        compat="override",
+        drop_variables=["history_t", "history_front", "history_stage"],
+        engine="netcdf4",
+    )
+    up = ds["piston_velocity"].values
+    pole = {k: ds[k].isel(u_p=0) for k in (*POLE_VARS, *(k + ERR_SUFFIX for k in POLE_VARS)) if k in ds}
+    pts = ds[[k for k in keep if k in ds] + ["converged"]]
+    # Strings are read per file: concatenating them lazily truncates to the first one's width.
+    texts = {"status": [], "diagnostic": []}
+    for p in paths:
+        with xr.open_dataset(p, engine="netcdf4") as one:
+            for k in texts:
+                texts[k].append(str(one[k].values))
+    for k, v in texts.items():
+        pts[k] = ("u_p", np.array(v, dtype=object), {"long_name": POINT_TEXT[k]})
+    pts = pts.assign_coords(u_p=("u_p", up, {"units": "sigma tau^-1", "long_name": "nominal piston velocity"}))
+    out = pts.expand_dims(scheme=[scheme])
+    for k, v in pole.items():
+        out[k] = v.drop_vars([c for c in v.coords])
+    if reference is not None:
+        for name, var in reference.data_vars.items():
+            out["ref_" + name] = var.rename({d: "ref_point" for d in var.dims})
+            out["ref_" + name].attrs = dict(var.attrs, long_name="reference Hugoniot (equilibrium MD): " + var.attrs.get("long_name", name))
+    out.attrs.update(provenance_attrs(config))
+    out.attrs.update(scene=scene, title=f"Hugoniot of scene {scene}")
+    return out

@@ -1,0 +1,237 @@
+"""One function per workflow stage: file in, file out, no physics of its own.
+
+prepare_sample → load_to_target (checkpoint) → piston_point → aggregate → figures, and the
+equilibrium reference beside them. A stage whose solver breaks still writes its output, marked
+with a ``status`` and a ``diagnostic``, so the aggregate keeps the point, marked failed.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import resource
+import time
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .analysis.shock import analyse_piston, region_state
+from .analysis.stats import block_average
+from .io.atomic import write_netcdf
+from .io.dataset import POLE_VARS, aggregate_points, point_dataset, scalar_vars
+from .md.potential import LJParams
+from .md.sample import fcc_state
+from .md.simulation import MDSimulation, SolverUnstable
+from .window.piston import History, PistonParams, StageFailed, drive, load_to_target, start_piston
+
+log = logging.getLogger("hugomap")
+WALL_LAYER = 4.0  # sigma kept clear of a wall when measuring the pole (wall layering)
+
+
+def _lj(scene: dict) -> LJParams:
+    p = scene.get("potential", {})
+    return LJParams(rc=p.get("rc", 2.5), shift=p.get("shift", True), skin=p.get("skin", 0.3))
+
+
+def _cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def _pole_from(ds: xr.Dataset) -> dict[str, float]:
+    names = [*POLE_VARS, *(k + "_err" for k in POLE_VARS)]
+    return {k: float(ds[k]) for k in names if k in ds}
+
+
+def prepare_sample(scene: dict, out: str | os.PathLike) -> Path:
+    """FCC at (ρ0, T0) between two static walls, thermostatted (CSVR) for ``equilibrate_time``,
+    then run without thermostat for ``pole_time`` while the pole is measured away from the
+    walls: ρ0, P0 = P_xx, E0, T0 (block averages with standard errors)."""
+    s = scene["sample"]
+    lj = _lj(scene)
+    state = fcc_state(tuple(s["cells"]), s["rho0"], s["T0"], s["seed"], periodic_x=False)
+    sim = MDSimulation(state, lj, s["dt"], T_bath=s["T0"], tau_bath=s["thermostat_tau"], seed=s["seed"])
+    sim.advance(int(round(s["equilibrate_time"] / s["dt"])))
+    sim.T_bath = None
+    width = scene["shock"]["bin_width"]
+    area = float(state.L[1] * state.L[2])
+    every = 25
+    nsamples = max(int(round(s["pole_time"] / (s["dt"] * every))), 16)
+    keys = {"n": "rho0", "Pxx": "P0", "e": "E0", "T": "T0", "Pyy": "Pyy0"}
+    series = {k: [] for k in keys}
+    edges = np.arange(int(np.floor(state.L[0] / width + 1e-9)) + 1) * width
+    for _ in range(nsamples):
+        sim.advance(every)
+        st = region_state(sim.profile_sums(width), edges, WALL_LAYER, state.L[0] - WALL_LAYER, area)
+        for k in keys:
+            series[k].append(st[k])
+    pole = {}
+    for k, name in keys.items():
+        pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
+    log.info("pole: %s", json.dumps(pole))
+    extra = xr.Dataset(scalar_vars(pole, POLE_VARS))
+    return sim.save(out, extra=extra, attrs={"stage": "sample", "status": "ok", "scene_config": json.dumps(scene)})
+
+
+def _piston_params(scene: dict, u_p: float, sim: MDSimulation) -> PistonParams:
+    sh = scene["shock"]
+    L = sim.state.L
+    return PistonParams(
+        u_p=u_p,
+        bin_width=sh["bin_width"],
+        sample_every=sh["sample_every"],
+        load_distance=sh["load_fraction"] * float(L[0]),
+        rear_margin=sh["rear_margin"],
+        max_time=sh["max_time"],
+        area=float(L[1] * L[2]),
+    )
+
+
+def _failure(out: str | os.PathLike, status: str, diagnostic: str, attrs: dict) -> Path:
+    log.error("%s: %s", status, diagnostic)
+    ds = xr.Dataset(attrs={**attrs, "status": status, "diagnostic": diagnostic})
+    return write_netcdf(ds, out)
+
+
+def _history_extra(h: History) -> xr.Dataset:
+    a = h.arrays()
+    nb = a["sums"].shape[1] if a["sums"].ndim == 3 else 0
+    return xr.Dataset(
+        {
+            "hist_t": (("sample",), a["t"]),
+            "hist_x_left": (("sample",), a["x_left"]),
+            "hist_x_right": (("sample",), a["x_right"]),
+            "hist_front": (("sample",), a["front"]),
+            "hist_stage": (("sample",), a["stage"]),
+            "hist_sums": (("sample", "bin", "field"), a["sums"].reshape(len(a["t"]), nb, -1)),
+        }
+    )
+
+
+def _history_from(ds: xr.Dataset) -> History:
+    return History.from_arrays({k[5:]: ds[k].values for k in ds.data_vars if k.startswith("hist_")})
+
+
+def load_to_target_stage(sample: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike) -> Path:
+    """From the prepared sample, drive a piston at ``u_p`` until the front has travelled
+    ``load_fraction`` of the sample; save the complete state (the branching checkpoint)."""
+    t0, c0 = time.perf_counter(), _cpu()
+    with xr.open_dataset(sample, engine="netcdf4") as ds:
+        ds.load()
+    pole = _pole_from(ds)
+    sim = MDSimulation.from_dataset(ds)
+    sim.dt = scene["shock"]["dt"]
+    sim.T_bath = None
+    p = _piston_params(scene, u_p, sim)
+    start_piston(sim, u_p)
+    h = History()
+    step0 = sim.state.step
+    attrs = {"stage": "loaded", "u_p": u_p, "scene_config": json.dumps(scene)}
+    try:
+        load_to_target(sim, p, h)
+    except (SolverUnstable, StageFailed) as exc:
+        return _failure(out, exc.status, exc.diagnostic, attrs)
+    cost = {
+        "wall_s": time.perf_counter() - t0,
+        "cpu_s": _cpu() - c0,
+        "atom_steps": float(sim.state.n * (sim.state.step - step0)),
+    }
+    extra = xr.merge([_history_extra(h), xr.Dataset(scalar_vars(pole, POLE_VARS))])
+    return sim.save(out, extra=extra, attrs={**attrs, "status": "ok", "cost": json.dumps(cost)})
+
+
+def piston_point(loaded: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike, scheme: str = "piston") -> Path:
+    """Continue the piston from the loading checkpoint until the front nears the far wall,
+    then measure the Hugoniot point. A periodic checkpoint ``<out>.part.nc`` lets a killed
+    job resume where it stopped."""
+    t0, c0 = time.perf_counter(), _cpu()
+    sh = scene["shock"]
+    name = scene.get("name", "")
+    with xr.open_dataset(loaded, engine="netcdf4") as ds:
+        ds.load()
+    status = ds.attrs.get("status", "ok")
+    base_values = {"piston_velocity": u_p}
+    if status != "ok":
+        ds_out = point_dataset(base_values, {}, None, scheme, name, status, ds.attrs.get("diagnostic", ""), scene)
+        return write_netcdf(ds_out, out)
+    part = Path(str(out) + ".part.nc")
+    src = ds
+    if part.exists():
+        try:
+            with xr.open_dataset(part, engine="netcdf4") as dp:
+                dp.load()
+            src = dp
+            log.info("resuming from %s at t = %s", part, dp.attrs["time"])
+        except (OSError, ValueError, KeyError) as exc:
+            log.warning("ignoring unreadable partial checkpoint %s: %s", part, exc)
+    pole = _pole_from(ds)
+    cost = json.loads(src.attrs.get("cost", ds.attrs.get("cost", "{}")))
+    sim = MDSimulation.from_dataset(src)
+    h = _history_from(src)
+    p = _piston_params(scene, u_p, sim)
+    step0 = sim.state.step
+    n_since = [0]
+
+    def checkpoint() -> None:
+        n_since[0] += 1
+        if n_since[0] % sh["checkpoint_every"] == 0:
+            c = dict(cost)
+            c["wall_s"] = c.get("wall_s", 0) + time.perf_counter() - t0
+            c["cpu_s"] = c.get("cpu_s", 0) + _cpu() - c0
+            c["atom_steps"] = c.get("atom_steps", 0) + sim.state.n * (sim.state.step - step0)
+            extra = xr.merge([_history_extra(h), xr.Dataset(scalar_vars(pole, POLE_VARS))])
+            sim.save(part, extra=extra, attrs={"stage": "drive", "status": "ok", "cost": json.dumps(c)})
+
+    status, diagnostic = "ok", ""
+    try:
+        drive(sim, p, h, on_sample=checkpoint)
+    except (SolverUnstable, StageFailed) as exc:
+        status, diagnostic = exc.status, exc.diagnostic
+        log.error("%s: %s", status, diagnostic)
+    values = dict(base_values)
+    values["wall_s"] = cost.get("wall_s", 0) + time.perf_counter() - t0
+    values["cpu_s"] = cost.get("cpu_s", 0) + _cpu() - c0
+    values["atom_steps"] = cost.get("atom_steps", 0) + sim.state.n * (sim.state.step - step0)
+    if status == "ok":
+        r = analyse_piston(
+            h.arrays(), pole, p.area, p.bin_width, sh["gap"],
+            residual_tol=sh["residual_tol"], avg_length=sh["avg_length"],
+        )  # fmt: skip
+        r["u_p_measured"], r["u_p_measured_err"] = r.pop("u_p"), r.pop("u_p_err")
+        values.update(r)
+        status = str(r["status"])
+        if status != "ok":
+            diagnostic = "jump residuals: " + ", ".join(
+                f"{k} {values['residual_' + k]:+.3%}" for k in ("mass", "momentum", "energy")
+            )
+    ds_out = point_dataset(values, pole, h.arrays(), scheme, name, status, diagnostic, scene)
+    path = write_netcdf(ds_out, out)
+    part.unlink(missing_ok=True)
+    return path
+
+
+def reference_stage(scene: dict, out: str | os.PathLike) -> Path:
+    """The equilibrium-MD reference Hugoniot of the scene's pole and potential."""
+    from .analysis.reference import reference_hugoniot
+
+    s, r = scene["sample"], scene["reference"]
+    ds = reference_hugoniot(
+        s["rho0"], s["T0"], _lj(scene),
+        compressions=r["compressions"], cells=(r["cells"],) * 3, dt=r["dt"],
+        n_equil=r["equilibrate_steps"], n_prod=r["production_steps"], seed=s["seed"],
+    )  # fmt: skip
+    ds.attrs["scene_config"] = json.dumps(scene)
+    return write_netcdf(ds, out)
+
+
+def aggregate(points: list[str], reference: str | None, config: dict, scene: str, out: str | os.PathLike, scheme: str = "piston") -> Path:
+    """All points of a scene → ``results/hugoniot/<scene>.nc`` (dims scheme × u_p)."""
+    ref = None
+    if reference:
+        with xr.open_dataset(reference, engine="netcdf4") as r:
+            ref = r.load()
+    ds = aggregate_points(points, scheme, ref, config, scene)
+    ds = ds.sortby("u_p").load()
+    return write_netcdf(ds, out)

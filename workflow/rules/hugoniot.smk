@@ -1,0 +1,28 @@
+# Aggregation across piston velocities and the figures.
+
+
+rule aggregate:
+    input:
+        points=point_files,
+        reference=f"{RES}/{{scene}}/reference.nc",
+    output:
+        f"{RES}/hugoniot/{{scene}}.nc",
+    params:
+        config=lambda wildcards: json.dumps(config, sort_keys=True),
+    log:
+        f"{RES}/logs/{{scene}}/aggregate.log",
+    shell:
+        "{PY} -m hugomap aggregate --scene-name {wildcards.scene} --config-json {params.config:q}"
+        " --reference {input.reference} --out {output} {input.points} > {log} 2>&1"
+
+
+rule figures:
+    input:
+        f"{RES}/hugoniot/{{scene}}.nc",
+    output:
+        pv=f"{RES}/figures/{{scene}}_PV.png",
+        dup=f"{RES}/figures/{{scene}}_D_up.png",
+    log:
+        f"{RES}/logs/{{scene}}/figures.log",
+    shell:
+        "{PY} -m hugomap figures {input} --pv {output.pv} --dup {output.dup} > {log} 2>&1"
