@@ -10,7 +10,6 @@ min_version("9.0")
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
 from hugomap.config import ConfigError, load_schema, validate_config
 
-
 # The default sweep, unless a config was given on the command line (--configfile replaces
 # it rather than being merged into it, so a test config runs alone).
 if not config:
@@ -20,7 +19,12 @@ if not config:
 
 # Refuse a bad config before any job starts (schema ranges, unknown keys, cross-key checks).
 try:
-    validate_config(config, load_schema(Path(workflow.basedir) / "workflow" / "schemas" / "config.schema.json"))
+    validate_config(
+        config,
+        load_schema(
+            Path(workflow.basedir) / "workflow" / "schemas" / "config.schema.json"
+        ),
+    )
 except ConfigError as exc:
     raise WorkflowError(str(exc)) from None
 
@@ -31,6 +35,6 @@ include: "workflow/rules/hugoniot.smk"
 
 
 rule all:
+    default_target: True
     input:
         all_targets(),
-    default_target: True

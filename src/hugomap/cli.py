@@ -64,7 +64,9 @@ def main(argv: list[str] | None = None) -> int:
     elif args.cmd == "reference":
         pipeline.reference_stage(_scene(args), args.out)
     elif args.cmd == "aggregate":
-        pipeline.aggregate(args.points, args.reference, json.loads(args.config_json), args.scene_name, args.out)
+        pipeline.aggregate(
+            args.points, args.reference, json.loads(args.config_json), args.scene_name, args.out
+        )
     elif args.cmd == "figures":
         from .figures import hugoniot_figures
 

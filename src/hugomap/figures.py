@@ -12,7 +12,9 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 
-def hugoniot_figures(agg: str | os.PathLike, out_pv: str | os.PathLike, out_dup: str | os.PathLike) -> None:
+def hugoniot_figures(
+    agg: str | os.PathLike, out_pv: str | os.PathLike, out_dup: str | os.PathLike
+) -> None:
     """Draw P(V) and D(u_p) for one scene's aggregate; failed points drawn hollow."""
     with xr.open_dataset(agg, engine="netcdf4") as ds:
         ds = ds.load()
@@ -34,7 +36,13 @@ def hugoniot_figures(agg: str | os.PathLike, out_pv: str | os.PathLike, out_dup:
         ry = {"P": "ref_P", "D": "ref_D"}[yv]
         if rx in ds and ry in ds:
             order = np.argsort(ds[rx].values)
-            ax.plot(ds[rx].values[order], ds[ry].values[order], "k-", lw=1.2, label="reference (equilibrium MD)")
+            ax.plot(
+                ds[rx].values[order],
+                ds[ry].values[order],
+                "k-",
+                lw=1.2,
+                label="reference (equilibrium MD)",
+            )
         if xv == "V" and "rho0" in ds:
             ax.plot([1.0 / float(ds["rho0"])], [float(ds["P0"])], "k*", ms=9, label="pole")
         ax.set_xlabel(xl)

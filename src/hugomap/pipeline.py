@@ -52,7 +52,9 @@ def prepare_sample(scene: dict, out: str | os.PathLike) -> Path:
     s = scene["sample"]
     lj = _lj(scene)
     state = fcc_state(tuple(s["cells"]), s["rho0"], s["T0"], s["seed"], periodic_x=False)
-    sim = MDSimulation(state, lj, s["dt"], T_bath=s["T0"], tau_bath=s["thermostat_tau"], seed=s["seed"])
+    sim = MDSimulation(
+        state, lj, s["dt"], T_bath=s["T0"], tau_bath=s["thermostat_tau"], seed=s["seed"]
+    )
     sim.advance(int(round(s["equilibrate_time"] / s["dt"])))
     sim.T_bath = None
     width = scene["shock"]["bin_width"]
@@ -72,7 +74,11 @@ def prepare_sample(scene: dict, out: str | os.PathLike) -> Path:
         pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
     log.info("pole: %s", json.dumps(pole))
     extra = xr.Dataset(scalar_vars(pole, POLE_VARS))
-    return sim.save(out, extra=extra, attrs={"stage": "sample", "status": "ok", "scene_config": json.dumps(scene)})
+    return sim.save(
+        out,
+        extra=extra,
+        attrs={"stage": "sample", "status": "ok", "scene_config": json.dumps(scene)},
+    )
 
 
 def _piston_params(scene: dict, u_p: float, sim: MDSimulation) -> PistonParams:
@@ -114,7 +120,9 @@ def _history_from(ds: xr.Dataset) -> History:
     return History.from_arrays({k[5:]: ds[k].values for k in ds.data_vars if k.startswith("hist_")})
 
 
-def load_to_target_stage(sample: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike) -> Path:
+def load_to_target_stage(
+    sample: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike
+) -> Path:
     """From the prepared sample, drive a piston at ``u_p`` until the front has travelled
     ``load_fraction`` of the sample; save the complete state (the branching checkpoint)."""
     t0, c0 = time.perf_counter(), _cpu()
@@ -142,7 +150,13 @@ def load_to_target_stage(sample: str | os.PathLike, scene: dict, u_p: float, out
     return sim.save(out, extra=extra, attrs={**attrs, "status": "ok", "cost": json.dumps(cost)})
 
 
-def piston_point(loaded: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike, scheme: str = "piston") -> Path:
+def piston_point(
+    loaded: str | os.PathLike,
+    scene: dict,
+    u_p: float,
+    out: str | os.PathLike,
+    scheme: str = "piston",
+) -> Path:
     """Continue the piston from the loading checkpoint until the front nears the far wall,
     then measure the Hugoniot point. A periodic checkpoint ``<out>.part.nc`` lets a killed
     job resume where it stopped."""
@@ -154,7 +168,9 @@ def piston_point(loaded: str | os.PathLike, scene: dict, u_p: float, out: str | 
     status = ds.attrs.get("status", "ok")
     base_values = {"piston_velocity": u_p}
     if status != "ok":
-        ds_out = point_dataset(base_values, {}, None, scheme, name, status, ds.attrs.get("diagnostic", ""), scene)
+        ds_out = point_dataset(
+            base_values, {}, None, scheme, name, status, ds.attrs.get("diagnostic", ""), scene
+        )
         return write_netcdf(ds_out, out)
     part = Path(str(out) + ".part.nc")
     src = ds
@@ -182,7 +198,9 @@ def piston_point(loaded: str | os.PathLike, scene: dict, u_p: float, out: str | 
             c["cpu_s"] = c.get("cpu_s", 0) + _cpu() - c0
             c["atom_steps"] = c.get("atom_steps", 0) + sim.state.n * (sim.state.step - step0)
             extra = xr.merge([_history_extra(h), xr.Dataset(scalar_vars(pole, POLE_VARS))])
-            sim.save(part, extra=extra, attrs={"stage": "drive", "status": "ok", "cost": json.dumps(c)})
+            sim.save(
+                part, extra=extra, attrs={"stage": "drive", "status": "ok", "cost": json.dumps(c)}
+            )
 
     status, diagnostic = "ok", ""
     try:
@@ -226,7 +244,14 @@ def reference_stage(scene: dict, out: str | os.PathLike) -> Path:
     return write_netcdf(ds, out)
 
 
-def aggregate(points: list[str], reference: str | None, config: dict, scene: str, out: str | os.PathLike, scheme: str = "piston") -> Path:
+def aggregate(
+    points: list[str],
+    reference: str | None,
+    config: dict,
+    scene: str,
+    out: str | os.PathLike,
+    scheme: str = "piston",
+) -> Path:
     """All points of a scene → ``results/hugoniot/<scene>.nc`` (dims scheme × u_p)."""
     ref = None
     if reference:

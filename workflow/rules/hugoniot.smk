@@ -7,12 +7,15 @@ rule aggregate:
         reference=f"{RES}/{{scene}}/reference.nc",
     output:
         f"{RES}/hugoniot/{{scene}}.nc",
-    params:
-        config=lambda wildcards: json.dumps(config, sort_keys=True),
     log:
         f"{RES}/logs/{{scene}}/aggregate.log",
+    conda:
+        "../envs/hugomap.yaml"
+    params:
+        py=PY,
+        config=lambda wildcards: json.dumps(config, sort_keys=True),
     shell:
-        "{PY} -m hugomap aggregate --scene-name {wildcards.scene} --config-json {params.config:q}"
+        "{params.py} -m hugomap aggregate --scene-name {wildcards.scene} --config-json {params.config:q}"
         " --reference {input.reference} --out {output} {input.points} > {log} 2>&1"
 
 
@@ -24,5 +27,9 @@ rule figures:
         dup=f"{RES}/figures/{{scene}}_D_up.png",
     log:
         f"{RES}/logs/{{scene}}/figures.log",
+    conda:
+        "../envs/hugomap.yaml"
+    params:
+        py=PY,
     shell:
-        "{PY} -m hugomap figures {input} --pv {output.pv} --dup {output.dup} > {log} 2>&1"
+        "{params.py} -m hugomap figures {input} --pv {output.pv} --dup {output.dup} > {log} 2>&1"

@@ -9,13 +9,16 @@ wildcard_constraints:
 rule prepare_sample:
     output:
         f"{RES}/{{scene}}/sample.nc",
-    params:
-        scene=scene_json,
-    threads: config["threads"]
     log:
         f"{RES}/logs/{{scene}}/prepare.log",
+    conda:
+        "../envs/hugomap.yaml"
+    threads: config["threads"]
+    params:
+        py=PY,
+        scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS={threads} {PY} -m hugomap prepare --scene-name {wildcards.scene}"
+        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap prepare --scene-name {wildcards.scene}"
         " --scene-json {params.scene:q} --out {output} > {log} 2>&1"
 
 
@@ -24,13 +27,16 @@ rule load_to_target:
         f"{RES}/{{scene}}/sample.nc",
     output:
         f"{RES}/{{scene}}/up{{up}}/loaded.nc",
-    params:
-        scene=scene_json,
-    threads: config["threads"]
     log:
         f"{RES}/logs/{{scene}}/up{{up}}/load.log",
+    conda:
+        "../envs/hugomap.yaml"
+    threads: config["threads"]
+    params:
+        py=PY,
+        scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS={threads} {PY} -m hugomap load --scene-name {wildcards.scene}"
+        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap load --scene-name {wildcards.scene}"
         " --scene-json {params.scene:q} --sample {input} --u-p {wildcards.up}"
         " --out {output} > {log} 2>&1"
 
@@ -40,13 +46,16 @@ rule piston_point:
         f"{RES}/{{scene}}/up{{up}}/loaded.nc",
     output:
         f"{RES}/{{scene}}/up{{up}}/piston.nc",
-    params:
-        scene=scene_json,
-    threads: config["threads"]
     log:
         f"{RES}/logs/{{scene}}/up{{up}}/piston.log",
+    conda:
+        "../envs/hugomap.yaml"
+    threads: config["threads"]
+    params:
+        py=PY,
+        scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS={threads} {PY} -m hugomap piston --scene-name {wildcards.scene}"
+        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap piston --scene-name {wildcards.scene}"
         " --scene-json {params.scene:q} --loaded {input} --u-p {wildcards.up}"
         " --out {output} > {log} 2>&1"
 
@@ -54,11 +63,14 @@ rule piston_point:
 rule reference:
     output:
         f"{RES}/{{scene}}/reference.nc",
-    params:
-        scene=scene_json,
-    threads: 1
     log:
         f"{RES}/logs/{{scene}}/reference.log",
+    conda:
+        "../envs/hugomap.yaml"
+    threads: 1
+    params:
+        py=PY,
+        scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS=1 {PY} -m hugomap reference --scene-name {wildcards.scene}"
+        "NUMBA_NUM_THREADS=1 {params.py} -m hugomap reference --scene-name {wildcards.scene}"
         " --scene-json {params.scene:q} --out {output} > {log} 2>&1"

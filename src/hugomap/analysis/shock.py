@@ -52,13 +52,17 @@ def front_position(
     return float(x_edges[sel[lo]] + np.sum(w[lo:hi] * frac))
 
 
-def region_sums(sums: np.ndarray, x_edges: np.ndarray, x_lo: float, x_hi: float) -> tuple[np.ndarray, int]:
+def region_sums(
+    sums: np.ndarray, x_edges: np.ndarray, x_lo: float, x_hi: float
+) -> tuple[np.ndarray, int]:
     """Sum the raw bin sums (nbins, 11) of the bins lying wholly inside [x_lo, x_hi]."""
     inside = (x_edges[:-1] >= x_lo) & (x_edges[1:] <= x_hi)
     return sums[inside].sum(axis=0), int(inside.sum())
 
 
-def region_state(sums: np.ndarray, x_edges: np.ndarray, x_lo: float, x_hi: float, area: float) -> dict[str, float]:
+def region_state(
+    sums: np.ndarray, x_edges: np.ndarray, x_lo: float, x_hi: float, area: float
+) -> dict[str, float]:
     """Mean state of the slab [x_lo, x_hi] (whole bins): n, ux, Pxx, Pyy, Pzz, T, e.
 
     The bins are merged before the fields are formed, so the mean velocity removed is the
@@ -146,7 +150,14 @@ def analyse_piston(
     u_p = u_s - u_a
     out["D"], out["D_err"] = D, float(np.hypot(D_w_err, u_a_err))
     out["u_p"], out["u_p_err"] = u_p, float(np.hypot(u_s_err, u_a_err))
-    for key, name in (("n", "rho"), ("Pxx", "P"), ("Pyy", "Pyy"), ("Pzz", "Pzz"), ("T", "T"), ("e", "E")):
+    for key, name in (
+        ("n", "rho"),
+        ("Pxx", "P"),
+        ("Pyy", "Pyy"),
+        ("Pzz", "Pzz"),
+        ("T", "T"),
+        ("e", "E"),
+    ):
         out[name], out[name + "_err"] = block_average(np.asarray(shocked[key]), n_blocks)
     rho, P, E = out["rho"], out["P"], out["E"]
     out["V"] = 1.0 / rho

@@ -72,7 +72,9 @@ def scalar_vars(values: dict, table: dict[str, tuple[str, str]]) -> dict[str, xr
     out = {}
     for name, (units, long_name) in table.items():
         if name in values:
-            out[name] = xr.Variable((), float(values[name]), {"units": units, "long_name": long_name})
+            out[name] = xr.Variable(
+                (), float(values[name]), {"units": units, "long_name": long_name}
+            )
         if name + ERR_SUFFIX in values:
             out[name + ERR_SUFFIX] = xr.Variable(
                 (),
@@ -105,18 +107,38 @@ def point_dataset(
 ) -> xr.Dataset:
     """One Hugoniot point as a Dataset (NaN-filled where a failed run has no value)."""
     vals = {k: values.get(k, np.nan) for k in POINT_VARS}
-    vals.update({k + ERR_SUFFIX: values.get(k + ERR_SUFFIX, np.nan) for k in POINT_VARS if k + ERR_SUFFIX in values})
+    vals.update(
+        {
+            k + ERR_SUFFIX: values.get(k + ERR_SUFFIX, np.nan)
+            for k in POINT_VARS
+            if k + ERR_SUFFIX in values
+        }
+    )
     data = scalar_vars(vals, POINT_VARS)
     data.update(scalar_vars(pole, POLE_VARS))
-    data["converged"] = xr.Variable((), np.int8(bool(values.get("converged", False))), {"units": "1", "long_name": "1 if every jump residual is within tolerance"})
+    data["converged"] = xr.Variable(
+        (),
+        np.int8(bool(values.get("converged", False))),
+        {"units": "1", "long_name": "1 if every jump residual is within tolerance"},
+    )
     data["status"] = xr.Variable((), str(status), {"long_name": POINT_TEXT["status"]})
     data["diagnostic"] = xr.Variable((), str(diagnostic), {"long_name": POINT_TEXT["diagnostic"]})
     if history is not None and len(history.get("t", [])):
-        data["history_t"] = xr.Variable(("sample",), history["t"], {"units": "tau", "long_name": "sample time"})
-        data["history_front"] = xr.Variable(("sample",), history["front"], {"units": "sigma", "long_name": "front position (piston frame)"})
-        data["history_stage"] = xr.Variable(("sample",), history["stage"], {"units": "1", "long_name": "0 load, 1 drive"})
+        data["history_t"] = xr.Variable(
+            ("sample",), history["t"], {"units": "tau", "long_name": "sample time"}
+        )
+        data["history_front"] = xr.Variable(
+            ("sample",),
+            history["front"],
+            {"units": "sigma", "long_name": "front position (piston frame)"},
+        )
+        data["history_stage"] = xr.Variable(
+            ("sample",), history["stage"], {"units": "1", "long_name": "0 load, 1 drive"}
+        )
     ds = xr.Dataset(data)
-    ds.attrs.update(scheme=scheme, scene=scene, scene_config=json.dumps(scene_config, sort_keys=True))
+    ds.attrs.update(
+        scheme=scheme, scene=scene, scene_config=json.dumps(scene_config, sort_keys=True)
+    )
     return ds
 
 
@@ -128,7 +150,9 @@ def aggregate_points(
     scene: str,
 ) -> xr.Dataset:
     """Join point files (lazily, with dask) into one dataset with dims ``scheme`` × ``u_p``."""
-    keep = [k for k in (*POINT_VARS, *(k + ERR_SUFFIX for k in POINT_VARS)) if k != "piston_velocity"]
+    keep = [
+        k for k in (*POINT_VARS, *(k + ERR_SUFFIX for k in POINT_VARS)) if k != "piston_velocity"
+    ]
     # The dimension u_p is the nominal piston velocity; the measured jump is u_p_measured.
     ds = xr.open_mfdataset(
         [str(p) for p in paths],
@@ -141,7 +165,9 @@ def aggregate_points(
         engine="netcdf4",
     )
     up = ds["piston_velocity"].values
-    pole = {k: ds[k].isel(u_p=0) for k in (*POLE_VARS, *(k + ERR_SUFFIX for k in POLE_VARS)) if k in ds}
+    pole = {
+        k: ds[k].isel(u_p=0) for k in (*POLE_VARS, *(k + ERR_SUFFIX for k in POLE_VARS)) if k in ds
+    }
     pts = ds[[k for k in keep if k in ds] + ["converged"]]
     # Strings are read per file: concatenating them lazily truncates to the first one's width.
     texts = {"status": [], "diagnostic": []}
@@ -151,14 +177,20 @@ def aggregate_points(
                 texts[k].append(str(one[k].values))
     for k, v in texts.items():
         pts[k] = ("u_p", np.array(v, dtype=object), {"long_name": POINT_TEXT[k]})
-    pts = pts.assign_coords(u_p=("u_p", up, {"units": "sigma tau^-1", "long_name": "nominal piston velocity"}))
+    pts = pts.assign_coords(
+        u_p=("u_p", up, {"units": "sigma tau^-1", "long_name": "nominal piston velocity"})
+    )
     out = pts.expand_dims(scheme=[scheme])
     for k, v in pole.items():
         out[k] = v.drop_vars([c for c in v.coords])
     if reference is not None:
         for name, var in reference.data_vars.items():
             out["ref_" + name] = var.rename({d: "ref_point" for d in var.dims})
-            out["ref_" + name].attrs = dict(var.attrs, long_name="reference Hugoniot (equilibrium MD): " + var.attrs.get("long_name", name))
+            out["ref_" + name].attrs = dict(
+                var.attrs,
+                long_name="reference Hugoniot (equilibrium MD): "
+                + var.attrs.get("long_name", name),
+            )
     out.attrs.update(provenance_attrs(config))
     out.attrs.update(scene=scene, title=f"Hugoniot of scene {scene}")
     return out

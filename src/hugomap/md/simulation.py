@@ -311,7 +311,9 @@ class MDSimulation:
         ds.attrs.update(attrs or {})
         return ds
 
-    def save(self, path: str | os.PathLike, extra: xr.Dataset | None = None, attrs: dict | None = None) -> Path:
+    def save(
+        self, path: str | os.PathLike, extra: xr.Dataset | None = None, attrs: dict | None = None
+    ) -> Path:
         """Save the complete state (and ``extra`` variables) to netCDF, atomically."""
         return write_netcdf(self.to_dataset(extra, attrs), path)
 

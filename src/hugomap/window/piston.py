@@ -146,7 +146,10 @@ def load_to_target(solver: ShockSolver, p: PistonParams, history: History) -> No
 
 
 def drive(
-    solver: ShockSolver, p: PistonParams, history: History, on_sample: Callable[[], None] | None = None
+    solver: ShockSolver,
+    p: PistonParams,
+    history: History,
+    on_sample: Callable[[], None] | None = None,
 ) -> None:
     """Measurement stage: drive until the front is ``rear_margin`` from the far wall."""
     run_stage(

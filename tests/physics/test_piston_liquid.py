@@ -1,0 +1,79 @@
+"""A piston shock in the LJ liquid: jump conditions and agreement with equilibrium MD.
+
+References and tolerances:
+- The Rankine–Hugoniot jump conditions (mass, momentum, energy) are exact for a steady
+  front between uniform states; the measured residuals carry statistical errors of a few
+  1e-3 (block averages over the drive stage) plus the finite-length averaging slab, so the
+  2 % bound the issue asks for is met with room, and a broken front tracker, stress or
+  energy accounting (errors of 5 % and more) fails it.
+- The equilibrium-MD Hugoniot (hugomap.analysis.reference: NVT states at which
+  E − E0 = ½(P + P0)(V0 − V)) for the same potential (rc = 2.5 σ, shifted) and pole: a shocked
+  simple fluid is hydrostatic, so its P at the measured V must agree within 2 % (the issue's
+  bound; the reference's own statistical error is about 0.5 %).
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from hugomap import pipeline
+from hugomap.analysis.reference import interpolate_P, reference_hugoniot
+from hugomap.config import validate_config
+from hugomap.md.potential import LJParams
+
+SCENE = {
+    "solver": "md",
+    "phase": "liquid",
+    "potential": {"rc": 2.5, "shift": True, "skin": 0.3},
+    "sample": {
+        "rho0": 0.80,
+        "T0": 2.0,
+        "cells": [60, 5, 5],
+        "seed": 11,
+        "equilibrate_time": 6.0,
+        "pole_time": 4.0,
+    },
+    "shock": {"u_p": [2.0], "dt": 0.002, "gap": 6.0, "avg_length": 24.0, "load_fraction": 0.3},
+}
+
+
+@pytest.fixture(scope="module")
+def point(tmp_path_factory) -> xr.Dataset:
+    cfg = validate_config({"scenes": {"liq": copy.deepcopy(SCENE)}})
+    scene = dict(cfg["scenes"]["liq"], name="liq")
+    d: Path = tmp_path_factory.mktemp("piston")
+    pipeline.prepare_sample(scene, d / "sample.nc")
+    pipeline.load_to_target_stage(d / "sample.nc", scene, 2.0, d / "loaded.nc")
+    pipeline.piston_point(d / "loaded.nc", scene, 2.0, d / "point.nc")
+    with xr.open_dataset(d / "point.nc") as ds:
+        return ds.load()
+
+
+@pytest.mark.slow
+def test_jump_conditions_hold_within_2_percent(point: xr.Dataset) -> None:
+    assert str(point["status"].values) == "ok", str(point["diagnostic"].values)
+    for k in ("mass", "momentum", "energy"):
+        assert abs(float(point[f"residual_{k}"])) < 0.02, (k, float(point[f"residual_{k}"]))
+    # The shocked liquid is hydrostatic: transverse stresses equal the longitudinal one
+    # within their statistical errors (a few tenths of a percent; 2 % bound).
+    P = float(point["P"])
+    for k in ("Pyy", "Pzz"):
+        assert abs(float(point[k]) / P - 1) < 0.02
+
+
+@pytest.mark.slow
+def test_agrees_with_equilibrium_reference_within_2_percent(point: xr.Dataset) -> None:
+    rho = float(point["rho"])
+    ratio = rho / SCENE["sample"]["rho0"]
+    ref = reference_hugoniot(
+        SCENE["sample"]["rho0"], SCENE["sample"]["T0"], LJParams(rc=2.5, shift=True, skin=0.3),
+        compressions=np.array([ratio - 0.04, ratio + 0.04]), cells=(6, 6, 6), dt=0.004,
+        n_equil=500, n_prod=3000, seed=5,
+    )  # fmt: skip
+    P_ref = float(interpolate_P(ref, float(point["V"])))
+    assert abs(float(point["P"]) / P_ref - 1) < 0.02, (float(point["P"]), P_ref)
