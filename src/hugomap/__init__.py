@@ -1,3 +1,23 @@
 """hugomap: shock Hugoniots from molecular dynamics and contact SPH in moving windows."""
 
+import hashlib
+import os
+from pathlib import Path
+
 __version__ = "0.1.0"
+
+
+def _numba_cache_dir() -> str:
+    # numba's cache=True only notices edits to a kernel's own file, not to the kernels it
+    # calls from other files (numba#1833): a stale cache then runs old neighbour-list code
+    # silently. Keying the cache folder on a hash of every source file makes any edit
+    # compile afresh.
+    h = hashlib.sha256()
+    for f in sorted(Path(__file__).parent.rglob("*.py")):
+        h.update(f.read_bytes())
+    base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
+    return str(base / "hugomap" / f"numba-{h.hexdigest()[:16]}")
+
+
+# Must be set before numba is first imported; a user's own NUMBA_CACHE_DIR wins.
+os.environ.setdefault("NUMBA_CACHE_DIR", _numba_cache_dir())

@@ -231,7 +231,9 @@ def run_steps(
             counters[0] += 1
             if need > nbr.shape[1]:
                 return s, GROW
-        finish_step(x, v, f, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, dt, thermo, r1[s], chi[s])
+        finish_step(
+            x, v, f, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, dt, thermo, r1[s], chi[s]
+        )
     return nsteps, OK
 
 

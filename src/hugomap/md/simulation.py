@@ -202,7 +202,8 @@ class MDSimulation:
                 self._alloc_lists(int(self.nbr.shape[1] * 1.5) + 8)
                 self._build_list(sort=False)
                 ig.finish_step(
-                    *self._force_args()[:-1], self.lj.rc**2, self.dt, thermo,
+                    s.x, s.v, s.f, s.L, s.periodic, self.nbr, self.nnb, self.use_half,
+                    self.half, self.nhalf, self.lj.rc**2, self.dt, thermo,
                     r1[done_total], chi[done_total],
                 )  # fmt: skip
                 s.time = s.time + self.dt

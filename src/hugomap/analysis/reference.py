@@ -1,0 +1,682 @@
+"""Reference Hugoniot of the Lennard-Jones system from equilibrium NVT molecular dynamics.
+
+Independent of any shock simulation: every state is a fully periodic box at fixed density,
+held at a fixed temperature by the CSVR thermostat (``md.simulation.MDSimulation``), and the
+Hugoniot is found from the Rankine–Hugoniot energy condition alone.
+
+Reduced LJ units throughout (σ = ε = m = 1, τ = σ√(m/ε), k_B = 1); every per-atom quantity
+is also per unit mass (m = 1), so V = 1/ρ [σ³] is the specific volume and E [ε] the specific
+internal energy.
+
+Measured quantities of one NVT state (``measure_state``), N atoms in a box of volume 𝒱:
+
+    K = ½ Σ_i |v_i − v̄|²                          kinetic energy [ε]
+    T = 2K / (3N − 3)                              temperature [ε/k_B] (3N − 3 degrees of freedom)
+    E = (K + Σ_i u_i) / N                          internal energy per atom [ε]
+    P = (2K + Σ_i (W_i^xx + W_i^yy + W_i^zz)) / (3𝒱)    scalar pressure [ε σ⁻³]
+    P_xx = (Σ_i (v_i^x − v̄^x)² + Σ_i W_i^xx) / 𝒱         normal stress along x [ε σ⁻³]
+
+with u_i the per-atom potential energy and W_i^ab = ½ Σ_j r_ij^a F_ij^b the per-atom virial
+(``md.forces``). Means carry standard errors from block averaging (``block_average``).
+
+Hugoniot (Rankine–Hugoniot energy condition). For the pole (ρ0, T0) with measured E0, P0 and
+V0 = 1/ρ0, the shocked state at V = 1/ρ < V0 is the temperature T_H that solves
+
+    H(T) = E(V, T) − E0 − ½ (P(V, T) + P0) (V0 − V) = 0          [ε].
+
+H increases with T at fixed V (the slope dH/dT = c_V − ½ (V0 − V) (∂P/∂T)_V is positive
+wherever the Hugoniot is single-valued), so T_H is found by Newton/secant iterations, each
+iterate one fresh NVT run. Mass and momentum conservation across a steady shock then give the
+particle velocity u_p and the shock velocity D (both [σ/τ], pole at rest):
+
+    u_p = √((P − P0)(V0 − V)),        D = V0 √((P − P0) / (V0 − V)).
+
+The potential defines the Hugoniot: every dataset records ``rc`` and ``shift``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from .. import __version__
+from ..md.potential import LJParams
+from ..md.sample import fcc_state, maxwell_velocities
+from ..md.simulation import MDSimulation, MDState, SolverUnstable
+
+# Default liquid pole (a supercritical fluid that stays fluid under compression, see
+# shared/FACTS.md "Choosing the Lennard-Jones pole") and compressions ρ/ρ0.
+LIQUID_POLE = (0.80, 2.0)
+CRYSTAL_POLE = (1.05, 0.1)
+DEFAULT_COMPRESSIONS = np.round(np.linspace(1.05, 1.45, 8), 4)
+
+#: Mean squared displacement [σ²] over the production run above which a state is called
+#: diffusive (fluid). A crystal's vibrational MSD stays near the Lindemann value
+#: (0.15 × 1.1 σ)² ≈ 0.03 σ² up to melting; a dense LJ fluid (self-diffusion ≳ 0.02 σ²/τ)
+#: moves ≳ 1 σ² in the default 12 τ of production.
+MSD_FLUID = 0.5
+
+_UNITS = {
+    "rho": "sigma^-3",
+    "V": "sigma^3",
+    "P": "epsilon sigma^-3",
+    "Pxx": "epsilon sigma^-3",
+    "E": "epsilon",
+    "H": "epsilon",
+    "T": "epsilon k_B^-1",
+    "u_p": "sigma tau^-1",
+    "D": "sigma tau^-1",
+}
+
+
+# -- statistics ------------------------------------------------------------------------------
+def block_average(series: Sequence[float] | np.ndarray, n_blocks: int = 10) -> tuple[float, float]:
+    """Mean of a (correlated) time series and its standard error from block averaging.
+
+    The series is cut into ``n_blocks`` contiguous blocks of equal length b = ⌊n/n_blocks⌋
+    (the first n − n_blocks·b samples, the oldest, are dropped); with block means m_k,
+
+        mean = (1/n_b) Σ_k m_k,     SE = √( Σ_k (m_k − mean)² / (n_b (n_b − 1)) ).
+
+    The SE is right when a block is much longer than the series' correlation time (the
+    block means are then independent); it is itself uncertain by a factor ≈ 1/√(2(n_b − 1)).
+    Returns (mean, standard error) in the units of the series.
+    """
+    x = np.asarray(series, dtype=float).ravel()
+    if n_blocks < 2:
+        raise ValueError(f"n_blocks = {n_blocks}: need at least 2 blocks")
+    b = x.size // n_blocks
+    if b < 1:
+        raise ValueError(f"{x.size} samples cannot fill {n_blocks} blocks")
+    means = x[x.size - b * n_blocks :].reshape(n_blocks, b).mean(axis=1)
+    return float(means.mean()), float(means.std(ddof=1) / math.sqrt(n_blocks))
+
+
+def _derived_seed(*keys: int) -> int:
+    """A 31-bit seed from integer keys (independent streams per point and iteration)."""
+    return int(np.random.SeedSequence([int(k) for k in keys]).generate_state(1)[0] >> 1)
+
+
+# -- one equilibrium state --------------------------------------------------------------------
+def _run_nvt(
+    rho: float,
+    T: float,
+    lj: LJParams,
+    cells: tuple[int, int, int],
+    dt: float,
+    n_equil: int,
+    n_prod: int,
+    sample_every: int,
+    seed: int,
+    lattice_start: bool,
+    start: MDState | None,
+    tau_bath: float,
+) -> tuple[MDSimulation, dict[str, np.ndarray]]:
+    """Equilibrate, then sample every ``sample_every`` steps; return the simulation and series."""
+    if lattice_start or start is None:
+        state = fcc_state(cells, rho, T, seed, periodic_x=True)
+    else:
+        if not np.all(start.periodic):
+            raise ValueError("measure_state needs a fully periodic start state")
+        n = start.n
+        scale = (n / rho / float(np.prod(start.L))) ** (1.0 / 3.0)
+        state = MDState(
+            x=start.x * scale,
+            v=maxwell_velocities(n, T, seed),
+            L=start.L * scale,
+            periodic=np.ones(3, dtype=bool),
+            walls0=np.array([0.0, 0.0, start.L[0] * scale, 0.0]),
+        )
+    sim = MDSimulation(state, lj, dt, T_bath=T, tau_bath=tau_bath, seed=seed)
+    sim.advance(n_equil)
+    st = sim.state
+    n = st.n
+    vol = float(np.prod(st.L))
+    n_samples = n_prod // sample_every
+    out = {k: np.empty(n_samples) for k in ("E", "P", "Pxx", "T", "U")}
+    disp = np.zeros((n, 3))
+    x_prev = np.empty((n, 3))
+    x_prev[st.ids] = st.x  # by atom label: list rebuilds re-sort the atoms
+    for k in range(n_samples):
+        sim.advance(sample_every)
+        pe, vir = sim.per_atom_energy_virial()
+        v = st.v - st.v.mean(axis=0)
+        two_k = float(np.sum(v * v))
+        u = float(np.sum(pe))
+        out["E"][k] = (0.5 * two_k + u) / n
+        out["U"][k] = u / n
+        out["T"][k] = two_k / (3 * n - 3)
+        out["P"][k] = (two_k + float(np.sum(vir[:, :3]))) / (3.0 * vol)
+        out["Pxx"][k] = (float(np.sum(v[:, 0] ** 2)) + float(np.sum(vir[:, 0]))) / vol
+        # Unwrapped displacement by atom label: minimum image of the move between two
+        # samples (≪ L/2).
+        x_now = np.empty((n, 3))
+        x_now[st.ids] = st.x
+        d = x_now - x_prev
+        d -= st.L * np.rint(d / st.L)
+        disp += d
+        x_prev = x_now
+    out["msd"] = np.array([float(np.mean(np.sum(disp * disp, axis=1)))])
+    return sim, out
+
+
+def measure_state(
+    rho: float,
+    T: float,
+    lj: LJParams,
+    cells: tuple[int, int, int] = (6, 6, 6),
+    dt: float = 0.004,
+    n_equil: int = 500,
+    n_prod: int = 3000,
+    sample_every: int = 20,
+    seed: int = 0,
+    lattice_start: bool = True,
+    *,
+    start: MDState | None = None,
+    tau_bath: float = 0.1,
+    n_blocks: int = 10,
+    keep_series: bool = False,
+) -> dict[str, Any]:
+    """Equilibrium NVT state of the LJ system at density ``rho`` [σ⁻³] and temperature ``T``.
+
+    A fully periodic cubic box of 4·cx·cy·cz atoms, started from an FCC lattice at ``rho``
+    with Maxwell velocities at ``T`` (``lattice_start``; a fluid state melts during the
+    ``n_equil`` equilibration steps at the target T), or, when ``lattice_start`` is False
+    and a ``start`` state is given, from its positions rescaled to ``rho``. The CSVR thermostat (time constant ``tau_bath`` [τ])
+    holds T; after ``n_equil`` steps of ``dt`` [τ], ``n_prod`` production steps are sampled
+    every ``sample_every`` steps and averaged in ``n_blocks`` (≥ 8) blocks. If a run raises
+    ``SolverUnstable`` it is repeated once with dt/2 (and twice the steps: same times).
+
+    Returns a dict: ``rho``, ``V`` = 1/ρ [σ³], ``T_target``, and mean ± standard error
+    (keys ``X`` and ``X_err``) of ``T`` [ε/k_B], ``E`` (kinetic + potential per atom, the
+    specific internal energy [ε]), ``U`` (potential energy per atom [ε]), ``P`` (scalar
+    pressure (2K + Σ_i tr W_i)/(3𝒱) [ε σ⁻³]) and ``Pxx`` [ε σ⁻³]; the fluctuation estimates
+    ``dEdT`` = N Var(E)/T² (c_V per atom [k_B]) and ``dPdT`` = N Cov(P, E)/T² ([k_B σ⁻³],
+    canonical-ensemble identities, rough: for step sizes, not for results); ``msd`` [σ²] over
+    the production run and ``diffusive`` (msd > MSD_FLUID: the state flowed, i.e. is fluid);
+    ``n_atoms``, ``dt`` (the step actually used), ``n_samples``, ``seed``, ``wall_s``; the
+    final ``state`` (MDState); with ``keep_series`` the sampled series under ``series``.
+    """
+    if n_blocks < 8:
+        raise ValueError(f"n_blocks = {n_blocks}: use at least 8 blocks")
+    if not (rho > 0 and T > 0):
+        raise ValueError(f"rho = {rho}, T = {T}: both must be > 0")
+    if n_prod // sample_every < n_blocks:
+        raise ValueError(f"n_prod / sample_every = {n_prod // sample_every} < {n_blocks} blocks")
+    t_wall = time.perf_counter()
+    args = (rho, T, lj, cells, dt, n_equil, n_prod, sample_every, seed, lattice_start, start)
+    try:
+        sim, s = _run_nvt(*args, tau_bath)
+        dt_used = dt
+    except SolverUnstable as exc:
+        warnings.warn(
+            f"NVT run at rho = {rho}, T = {T} unstable with dt = {dt} ({exc}); retrying with "
+            f"dt = {dt / 2}",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        dt_used = 0.5 * dt
+        sim, s = _run_nvt(
+            rho, T, lj, cells, dt_used, 2 * n_equil, 2 * n_prod, 2 * sample_every, seed,
+            lattice_start, start, tau_bath,
+        )  # fmt: skip
+    n = sim.state.n
+    res: dict[str, Any] = {"rho": float(rho), "V": 1.0 / float(rho), "T_target": float(T)}
+    for key in ("T", "E", "U", "P", "Pxx"):
+        res[key], res[key + "_err"] = block_average(s[key], n_blocks)
+    tm = res["T"]
+    e_c = s["E"] - s["E"].mean()
+    res["dEdT"] = float(n * np.mean(e_c * e_c) / tm**2)
+    res["dPdT"] = float(n * np.mean((s["P"] - s["P"].mean()) * e_c) / tm**2)
+    res["msd"] = float(s["msd"][0])
+    res["diffusive"] = bool(res["msd"] > MSD_FLUID)
+    res.update(
+        n_atoms=n, dt=dt_used, n_samples=int(s["E"].size), seed=int(seed),
+        wall_s=time.perf_counter() - t_wall, state=sim.state,
+    )  # fmt: skip
+    if keep_series:
+        res["series"] = {k: v for k, v in s.items() if k != "msd"}
+    return res
+
+
+# -- pole and Hugoniot points ------------------------------------------------------------------
+def pole(rho0: float, T0: float, lj: LJParams, **kwargs: Any) -> dict[str, Any]:
+    """The pole (initial, unshocked state) at density ``rho0`` [σ⁻³] and temperature ``T0``.
+
+    One ``measure_state`` run (``kwargs`` go to it). Returns ``rho0``, ``V0`` = 1/ρ0 [σ³],
+    ``T0`` (the target), ``T0_measured`` ± ``T0_measured_err``, ``E0`` ± ``E0_err`` [ε],
+    ``P0`` ± ``P0_err`` [ε σ⁻³], ``Pxx0`` ± ``Pxx0_err``, ``diffusive`` and the full
+    measurement under ``state``.
+    """
+    m = measure_state(rho0, T0, lj, **kwargs)
+    return {
+        "rho0": float(rho0),
+        "V0": 1.0 / float(rho0),
+        "T0": float(T0),
+        "T0_measured": m["T"],
+        "T0_measured_err": m["T_err"],
+        "E0": m["E"],
+        "E0_err": m["E_err"],
+        "P0": m["P"],
+        "P0_err": m["P_err"],
+        "Pxx0": m["Pxx"],
+        "Pxx0_err": m["Pxx_err"],
+        "diffusive": m["diffusive"],
+        "state": m,
+    }
+
+
+def jump_velocities(
+    P: float, P_err: float, V: float, pole: dict[str, Any]
+) -> tuple[float, float, float, float]:
+    """u_p, its error, D, its error [σ/τ] from the jump conditions (pole at rest).
+
+        u_p = √((P − P0)(V0 − V)),   D = V0 √((P − P0)/(V0 − V)),
+        σ_u/u_p = σ_D/D = ½ √(σ_P² + σ_P0²) / (P − P0)   (V and V0 exact).
+
+    NaN where P ≤ P0 or V ≥ V0 (no compressive shock).
+    """
+    dp = P - pole["P0"]
+    dv = pole["V0"] - V
+    if not (dp > 0 and dv > 0):
+        return math.nan, math.nan, math.nan, math.nan
+    u_p = math.sqrt(dp * dv)
+    D = pole["V0"] * math.sqrt(dp / dv)
+    rel = 0.5 * math.hypot(P_err, pole["P0_err"]) / dp
+    return u_p, u_p * rel, D, D * rel
+
+
+def hugoniot_point(
+    rho: float,
+    pole: dict[str, Any],
+    lj: LJParams,
+    *,
+    T_guess: float | None = None,
+    max_iter: int = 10,
+    h_tol_sigma: float = 1.0,
+    seed: int = 0,
+    on_iteration: Callable[[dict[str, Any]], None] | None = None,
+    **kwargs: Any,
+) -> dict[str, Any]:
+    """The Hugoniot state at density ``rho`` [σ⁻³] for ``pole`` (from ``pole()``).
+
+    Solves H(T) = E(T) − E0 − ½ (P(T) + P0)(V0 − V) = 0 at V = 1/ρ (Rankine–Hugoniot energy
+    condition, [ε]) by iterating on T, each iterate a fresh NVT run (``measure_state``,
+    ``kwargs`` go to it: FCC start at ρ, melted at the target T during equilibration).
+    H is averaged per sample, so its standard error σ_H carries the E–P correlation.
+    Iterate 0 runs at ``T_guess`` (default T0 (ρ/ρ0)²); iterate 1 is a Newton step with the
+    fluctuation slope dH/dT = N Cov(H, E)/T²; later ones are secant steps: the root of the
+    weighted least-squares line H(T) through the last three iterates (the secant of the last
+    two when there are two), falling back to the Newton step where that line's slope is not
+    significant, and kept inside the bracket once iterates with H < 0 and H > 0 exist. Stops when
+    |H| < ``h_tol_sigma``·σ_H or after ``max_iter`` runs (then the run of smallest |H|/σ_H
+    is kept and ``converged`` is False, with a warning).
+
+    Returns ``rho``, ``V``, ``T``, ``E``, ``P``, ``Pxx`` of the accepted run with errors,
+    ``H`` and ``H_err`` (σ_H of the run and the pole's σ_E0, ½(V0 − V)σ_P0 in quadrature),
+    ``u_p``, ``D`` (jump conditions, see ``jump_velocities``) with errors, ``dHdT``,
+    ``n_iter``, ``converged``, ``diffusive``, ``msd``, ``history`` (T, H, σ_H per iterate),
+    ``wall_s``. Error model: ``T_err`` = H_err/(dH/dT) ⊕ σ_T (the root is known to within
+    H_err); ``P_err`` = σ_P ⊕ (∂P/∂T)·δT and ``E_err`` = σ_E ⊕ (∂E/∂T)·δT with δT = H_err/(dH/dT),
+    so that the error of a reference point includes where along the isochore it sits.
+    """
+    t_wall = time.perf_counter()
+    if not rho > pole["rho0"]:
+        raise ValueError(f"rho = {rho} <= rho0 = {pole['rho0']}: a shock compresses (rho > rho0)")
+    V = 1.0 / float(rho)
+    V0, E0, P0 = pole["V0"], pole["E0"], pole["P0"]
+    dV = V0 - V
+    n_blocks = int(kwargs.get("n_blocks", 10))
+    T = float(T_guess) if T_guess is not None else pole["T0"] * (rho / pole["rho0"]) ** 2
+    runs: list[dict[str, Any]] = []
+    for it in range(max_iter):
+        m = measure_state(rho, T, lj, seed=_derived_seed(seed, it), keep_series=True, **kwargs)
+        s = m.pop("series")
+        h = s["E"] - E0 - 0.5 * (s["P"] + P0) * dV
+        m["H"], m["H_sigma"] = block_average(h, n_blocks)
+        hc = h - h.mean()
+        m["dHdT_fluct"] = float(m["n_atoms"] * np.mean(hc * (s["E"] - s["E"].mean())) / m["T"] ** 2)
+        runs.append(m)
+        if on_iteration is not None:
+            on_iteration(
+                {"iter": it, "rho": rho, "T": m["T_target"], "H": m["H"], "H_err": m["H_sigma"]}
+            )
+        if abs(m["H"]) < h_tol_sigma * m["H_sigma"]:
+            break
+        T = _next_temperature(runs)
+    best = runs[-1]
+    converged = abs(best["H"]) < h_tol_sigma * best["H_sigma"]
+    if not converged:
+        best = min(runs, key=lambda r: abs(r["H"]) / r["H_sigma"])
+        warnings.warn(
+            f"Hugoniot point at rho = {rho}: |H| = {abs(best['H']):.3g} > {h_tol_sigma} sigma_H "
+            f"= {h_tol_sigma * best['H_sigma']:.3g} after {len(runs)} runs",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    fit = _line_fit(runs)
+    slope = fit[2] if fit is not None else _slope_fluct(runs)
+    dEdT = float(np.mean([r["dEdT"] for r in runs]))
+    dPdT = float(np.mean([r["dPdT"] for r in runs]))
+    H_err = math.sqrt(best["H_sigma"] ** 2 + pole["E0_err"] ** 2 + (0.5 * dV * pole["P0_err"]) ** 2)
+    dT_root = H_err / slope
+    P_err = math.hypot(best["P_err"], dPdT * dT_root)
+    u_p, u_p_err, D, D_err = jump_velocities(best["P"], P_err, V, pole)
+    return {
+        "rho": float(rho),
+        "V": V,
+        "T": best["T"],
+        "T_err": math.hypot(best["T_err"], dT_root),
+        "E": best["E"],
+        "E_err": math.hypot(best["E_err"], dEdT * dT_root),
+        "P": best["P"],
+        "P_err": P_err,
+        "Pxx": best["Pxx"],
+        "Pxx_err": math.hypot(best["Pxx_err"], dPdT * dT_root),
+        "H": best["H"],
+        "H_err": H_err,
+        "u_p": u_p,
+        "u_p_err": u_p_err,
+        "D": D,
+        "D_err": D_err,
+        "dHdT": slope,
+        "n_iter": len(runs),
+        "converged": bool(converged),
+        "diffusive": best["diffusive"],
+        "msd": best["msd"],
+        "dt": best["dt"],
+        "history": [(r["T_target"], r["H"], r["H_sigma"]) for r in runs],
+        "wall_s": time.perf_counter() - t_wall,
+    }
+
+
+def _next_temperature(runs: list[dict[str, Any]]) -> float:
+    """Next iterate: Newton step (fluctuation slope) after one run, then the root of the
+    weighted least-squares line H(T) through the last three runs when its slope is
+    significant, kept inside the bracket of the runs with H < 0 and H > 0."""
+    last = runs[-1]
+    fit = _line_fit(runs[-3:])
+    if fit is not None:
+        t_mean, h_mean, slope = fit
+        T_new = t_mean - h_mean / slope
+    else:
+        best = min(runs, key=lambda r: abs(r["H"]) / r["H_sigma"])
+        T_new = best["T_target"] - best["H"] / _slope_fluct(runs)
+    T_new = float(np.clip(T_new, last["T_target"] / 3.0, 3.0 * last["T_target"]))
+    below = [r["T_target"] for r in runs if r["H"] < 0]
+    above = [r["T_target"] for r in runs if r["H"] > 0]
+    if below and above and max(below) < min(above):
+        lo, hi = max(below), min(above)
+        if not lo < T_new < hi:
+            T_new = 0.5 * (lo + hi)
+    return T_new
+
+
+def _slope_fluct(runs: list[dict[str, Any]]) -> float:
+    """dH/dT from the fluctuation estimates of all runs, kept within physical bounds."""
+    s = float(np.mean([r["dHdT_fluct"] for r in runs]))
+    return float(np.clip(s, 0.3, 20.0)) if np.isfinite(s) else 1.5
+
+
+def _line_fit(runs: list[dict[str, Any]]) -> tuple[float, float, float] | None:
+    """Weighted least-squares line H = h_m + s (T − t_m) through ``runs``: (t_m, h_m, s), or
+    None with fewer than two runs or a slope not positive by three of its standard errors."""
+    if len(runs) < 2:
+        return None
+    t = np.array([r["T_target"] for r in runs])
+    h = np.array([r["H"] for r in runs])
+    w = 1.0 / np.array([r["H_sigma"] for r in runs]) ** 2
+    tm = np.sum(w * t) / np.sum(w)
+    sxx = np.sum(w * (t - tm) ** 2)
+    if sxx <= 0:
+        return None
+    slope = float(np.sum(w * (t - tm) * h) / sxx)
+    slope_err = 1.0 / math.sqrt(sxx)
+    if not slope > 3.0 * slope_err:
+        return None
+    return float(tm), float(np.sum(w * h) / np.sum(w)), slope
+
+
+# -- the whole reference curve -------------------------------------------------------------------
+def reference_hugoniot(
+    rho0: float = LIQUID_POLE[0],
+    T0: float = LIQUID_POLE[1],
+    lj: LJParams | None = None,
+    compressions: Sequence[float] | np.ndarray = DEFAULT_COMPRESSIONS,
+    cells: tuple[int, int, int] = (6, 6, 6),
+    dt: float = 0.004,
+    n_equil: int = 500,
+    n_prod: int = 3000,
+    seed: int = 0,
+    *,
+    sample_every: int = 20,
+    tau_bath: float = 0.1,
+    n_blocks: int = 10,
+    max_iter: int = 10,
+    h_tol_sigma: float = 1.0,
+    pole_prod_factor: int = 4,
+    progress: Callable[[str], None] | None = None,
+) -> xr.Dataset:
+    """Reference Hugoniot of the LJ potential ``lj`` (rc, shift) through the pole (ρ0, T0).
+
+    Measures the pole (``pole``, with ``pole_prod_factor`` × ``n_prod`` production steps,
+    since its errors enter every point), then ``hugoniot_point`` at ρ = ρ0·c for each compression
+    c > 1 in ``compressions`` (sorted ascending); each point's first T is extrapolated from
+    the points found so far (ln T quadratic in ln ρ through the last three, linear through two).
+    The pole itself is the first row (c = 1; u_p = 0, D undefined = NaN).
+
+    Returns an ``xarray.Dataset`` along dimension ``point`` (coordinate ``compression`` =
+    ρ/ρ0), with variables (each with ``units`` and ``long_name``; ``X_err`` one standard
+    error, see ``hugoniot_point`` for the error model): ``rho`` [σ⁻³] and ``V`` = 1/ρ [σ³]
+    (exact: their errors are 0), ``P``, ``Pxx`` [ε σ⁻³], ``E`` [ε], ``T`` [ε/k_B], ``u_p``,
+    ``D`` [σ/τ], the energy residual ``H`` [ε], ``n_iter``, ``converged``, ``diffusive`` and
+    ``msd`` [σ²]; attributes ``rc``, ``shift`` (0/1), ``rho0``, ``T0``, ``E0``, ``E0_err``,
+    ``P0``, ``P0_err`` and the run settings, ``method`` describing the procedure.
+    """
+    lj = LJParams() if lj is None else lj
+    t_wall = time.perf_counter()
+    comp = np.unique(np.asarray(compressions, dtype=float))
+    if np.any(comp <= 1.0):
+        raise ValueError(f"compressions {comp}: every rho/rho0 must be > 1 (the pole is added)")
+    kw = dict(
+        cells=cells, dt=dt, n_equil=n_equil, n_prod=n_prod, sample_every=sample_every,
+        tau_bath=tau_bath, n_blocks=n_blocks,
+    )  # fmt: skip
+    say = progress or (lambda msg: None)
+    # The pole enters every point (E0, P0 and their errors): sample it longer.
+    p = pole(
+        rho0, T0, lj, seed=_derived_seed(seed, 0), **{**kw, "n_prod": pole_prod_factor * n_prod}
+    )
+    say(
+        f"pole rho0={rho0} T0={T0}: E0={p['E0']:.4f}±{p['E0_err']:.4f} P0={p['P0']:.4f}±{p['P0_err']:.4f}"
+    )
+    m0 = p["state"]
+
+    def iter_msg(d: dict[str, Any]) -> None:
+        say(
+            f"  iter {d['iter']}: rho={d['rho']:.4f} T={d['T']:.4f} H={d['H']:+.4f}±{d['H_err']:.4f}"
+        )
+
+    rows: list[dict[str, Any]] = [
+        {
+            "rho": rho0, "V": 1.0 / rho0, "T": m0["T"], "T_err": m0["T_err"], "E": p["E0"],
+            "E_err": p["E0_err"], "P": p["P0"], "P_err": p["P0_err"], "Pxx": p["Pxx0"],
+            "Pxx_err": p["Pxx0_err"], "H": 0.0, "H_err": 0.0, "u_p": 0.0, "u_p_err": 0.0,
+            "D": math.nan, "D_err": math.nan, "n_iter": 1, "converged": True,
+            "diffusive": m0["diffusive"], "msd": m0["msd"],
+        }
+    ]  # fmt: skip
+    for i, c in enumerate(comp, start=1):
+        rho = rho0 * c
+        known_rho = np.array([r["rho"] for r in rows[-3:]])
+        known_T = np.array([r["T"] for r in rows[-3:]])
+        if len(rows) == 1:
+            T_guess = T0 * c**2
+        else:
+            coef = np.polyfit(np.log(known_rho), np.log(known_T), deg=min(2, len(rows) - 1))
+            T_guess = float(np.exp(np.polyval(coef, np.log(rho))))
+            T_guess = min(max(T_guess, rows[-1]["T"]), 3.0 * rows[-1]["T"])
+        pt = hugoniot_point(
+            rho, p, lj, T_guess=T_guess, max_iter=max_iter, h_tol_sigma=h_tol_sigma,
+            seed=_derived_seed(seed, i), on_iteration=iter_msg, **kw,
+        )  # fmt: skip
+        say(
+            f"rho={rho:.4f}: T={pt['T']:.4f} P={pt['P']:.4f}±{pt['P_err']:.4f} "
+            f"u_p={pt['u_p']:.4f} D={pt['D']:.4f} H={pt['H']:.4f}±{pt['H_err']:.4f} "
+            f"iters={pt['n_iter']} ({pt['wall_s']:.1f} s)"
+        )
+        rows.append(pt)
+    wall = time.perf_counter() - t_wall
+    return _to_dataset(
+        rows, np.concatenate([[1.0], comp]), p, lj, kw, seed, max_iter, h_tol_sigma, wall
+    )
+
+
+def _to_dataset(
+    rows: list[dict[str, Any]],
+    comp: np.ndarray,
+    p: dict[str, Any],
+    lj: LJParams,
+    kw: dict[str, Any],
+    seed: int,
+    max_iter: int,
+    h_tol_sigma: float,
+    wall: float,
+) -> xr.Dataset:
+    names = {
+        "rho": "number density (= mass density, m = 1)",
+        "V": "specific volume 1/rho",
+        "P": "scalar pressure (2K + sum tr W)/(3 Vbox)",
+        "Pxx": "normal stress xx (hydrostatic: equals P within errors)",
+        "E": "specific internal energy (kinetic + potential per atom)",
+        "T": "temperature 2K/(3N - 3)",
+        "u_p": "particle velocity sqrt((P - P0)(V0 - V))",
+        "D": "shock velocity V0 sqrt((P - P0)/(V0 - V))",
+        "H": "Rankine-Hugoniot energy residual E - E0 - (P + P0)(V0 - V)/2",
+    }
+    data: dict[str, Any] = {}
+    for key, long_name in names.items():
+        vals = np.array([r[key] for r in rows], dtype=float)
+        errs = (
+            np.zeros_like(vals)
+            if key in ("rho", "V")
+            else np.array([r[key + "_err"] for r in rows], dtype=float)
+        )
+        u = _UNITS[key]
+        data[key] = ("point", vals, {"units": u, "long_name": long_name})
+        data[key + "_err"] = (
+            "point",
+            errs,
+            {
+                "units": u,
+                "long_name": f"standard error of {key}"
+                + (" (exact)" if key in ("rho", "V") else ""),
+            },
+        )
+    data["n_iter"] = ("point", np.array([r["n_iter"] for r in rows], dtype=np.int32),
+                      {"units": "1", "long_name": "NVT runs used to solve H(T) = 0"})  # fmt: skip
+    data["converged"] = ("point", np.array([r["converged"] for r in rows], dtype=np.int8),
+                         {"units": "1", "long_name": "1 if |H| < h_tol_sigma * sigma_H"})  # fmt: skip
+    data["diffusive"] = ("point", np.array([r["diffusive"] for r in rows], dtype=np.int8),
+                         {"units": "1", "long_name": f"1 if msd > {MSD_FLUID} sigma^2 (fluid)"})  # fmt: skip
+    data["msd"] = ("point", np.array([r["msd"] for r in rows], dtype=float),
+                   {"units": "sigma^2", "long_name": "mean squared displacement over production"})  # fmt: skip
+    ds = xr.Dataset(
+        data,
+        coords={"compression": ("point", comp, {"units": "1", "long_name": "rho/rho0"})},
+    )
+    n_atoms = int(p["state"]["n_atoms"])
+    ds.attrs.update(
+        title="Reference Hugoniot of the Lennard-Jones system from equilibrium NVT MD",
+        rc=float(lj.rc),
+        shift=int(bool(lj.shift)),
+        skin=float(lj.skin),
+        rho0=float(p["rho0"]),
+        T0=float(p["T0"]),
+        E0=float(p["E0"]),
+        E0_err=float(p["E0_err"]),
+        P0=float(p["P0"]),
+        P0_err=float(p["P0_err"]),
+        units="reduced LJ units: sigma, epsilon, m, tau = sigma sqrt(m/epsilon), k_B = 1",
+        method=(
+            "Equilibrium NVT MD (velocity Verlet, CSVR thermostat) in a fully periodic cubic "
+            "box started from an FCC lattice at each density. Pole measured at (rho0, T0); at "
+            "each rho the temperature solving the Rankine-Hugoniot energy condition "
+            "H = E - E0 - (P + P0)(V0 - V)/2 = 0 is found by Newton/secant iterations on T "
+            "(one fresh NVT run per iterate) until |H| < h_tol_sigma * sigma_H; "
+            "u_p = sqrt((P - P0)(V0 - V)), D = V0 sqrt((P - P0)/(V0 - V)). Errors: block "
+            "averages, plus the uncertainty of the root T (hugomap.analysis.reference)."
+        ),
+        n_atoms=n_atoms,
+        cells=np.asarray(kw["cells"], dtype=np.int32),
+        dt=float(kw["dt"]),
+        n_equil=int(kw["n_equil"]),
+        n_prod=int(kw["n_prod"]),
+        pole_n_prod=int(p["state"]["n_samples"] * kw["sample_every"]),
+        sample_every=int(kw["sample_every"]),
+        tau_bath=float(kw["tau_bath"]),
+        n_blocks=int(kw["n_blocks"]),
+        max_iter=int(max_iter),
+        h_tol_sigma=float(h_tol_sigma),
+        seed=int(seed),
+        wall_time_s=float(wall),
+        hugomap_version=__version__,
+    )
+    return ds
+
+
+# -- interpolation -------------------------------------------------------------------------------
+def interpolate_P(ref_ds: xr.Dataset, V: float | np.ndarray) -> float | np.ndarray:
+    """Reference pressure [ε σ⁻³] at specific volume ``V`` [σ³] on the Hugoniot ``ref_ds``.
+
+    Monotone piecewise-cubic Hermite interpolation in V (Fritsch & Carlson, SIAM J. Numer.
+    Anal. 17, 238 (1980)): no overshoot between points, exact at the points. Raises
+    ValueError for V outside [min V, max V] of the dataset (no extrapolation).
+    """
+    order = np.argsort(ref_ds["V"].values)
+    x = np.asarray(ref_ds["V"].values, dtype=float)[order]
+    y = np.asarray(ref_ds["P"].values, dtype=float)[order]
+    v = np.asarray(V, dtype=float)
+    tol = 1e-12 * max(1.0, abs(x[-1]))
+    if np.any(~np.isfinite(v)) or np.any(v < x[0] - tol) or np.any(v > x[-1] + tol):
+        raise ValueError(f"V = {V} outside the reference range [{x[0]:.6g}, {x[-1]:.6g}] sigma^3")
+    if x.size < 2:
+        raise ValueError("need at least two reference points to interpolate")
+    h = np.diff(x)
+    delta = np.diff(y) / h
+    d = np.zeros_like(y)
+    if x.size == 2:
+        d[:] = delta[0]
+    else:
+        for k in range(1, x.size - 1):
+            if delta[k - 1] * delta[k] > 0:
+                w1 = 2 * h[k] + h[k - 1]
+                w2 = h[k] + 2 * h[k - 1]
+                d[k] = (w1 + w2) / (w1 / delta[k - 1] + w2 / delta[k])
+        d[0] = _pchip_end(h[0], h[1], delta[0], delta[1])
+        d[-1] = _pchip_end(h[-1], h[-2], delta[-1], delta[-2])
+    vc = np.clip(v, x[0], x[-1])
+    k = np.clip(np.searchsorted(x, vc, side="right") - 1, 0, x.size - 2)
+    t = (vc - x[k]) / h[k]
+    h00 = (1 + 2 * t) * (1 - t) ** 2
+    h10 = t * (1 - t) ** 2
+    h01 = t * t * (3 - 2 * t)
+    h11 = t * t * (t - 1)
+    out = h00 * y[k] + h10 * h[k] * d[k] + h01 * y[k + 1] + h11 * h[k] * d[k + 1]
+    return float(out) if np.ndim(V) == 0 else out
+
+
+def _pchip_end(h0: float, h1: float, m0: float, m1: float) -> float:
+    """One-sided three-point end derivative, limited to keep the interpolant monotone."""
+    d = ((2 * h0 + h1) * m0 - h0 * m1) / (h0 + h1)
+    if np.sign(d) != np.sign(m0):
+        return 0.0
+    if np.sign(m0) != np.sign(m1) and abs(d) > abs(3 * m0):
+        return 3 * m0
+    return d
