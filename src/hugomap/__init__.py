@@ -2,6 +2,7 @@
 
 import hashlib
 import os
+import sys
 from pathlib import Path
 
 __version__ = "0.1.0"
@@ -19,5 +20,10 @@ def _numba_cache_dir() -> str:
     return str(base / "hugomap" / f"numba-{h.hexdigest()[:16]}")
 
 
-# Must be set before numba is first imported; a user's own NUMBA_CACHE_DIR wins.
-os.environ.setdefault("NUMBA_CACHE_DIR", _numba_cache_dir())
+# A user's own NUMBA_CACHE_DIR wins. numba reads the variable when it is first imported; if
+# it was imported before hugomap, its config is set too (it is read when a kernel is
+# decorated), or the kernels would load stale caches from __pycache__ (seen: a segfault).
+if "NUMBA_CACHE_DIR" not in os.environ:
+    os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
+    if "numba" in sys.modules:
+        sys.modules["numba"].config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]

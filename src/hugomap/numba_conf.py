@@ -2,7 +2,9 @@
 
 ``cache=True`` matters here: every Snakemake job is a fresh Python process, so without an
 on-disk cache every job would recompile every kernel. ``fastmath`` lets LLVM vectorise the
-branch-free pair loops; ``error_model='numpy'`` removes the division-by-zero checks.
+branch-free pair loops; it is given as a flag set without ``nnan``/``ninf``, because with those
+LLVM may delete the ``x != x`` and ``isinf`` tests that stop an unstable run with status
+``nan``. ``error_model='numpy'`` removes the division-by-zero checks.
 Set ``NUMBA_DISABLE_JIT=1`` to run every kernel as plain Python (the unit tests do).
 """
 
@@ -10,7 +12,8 @@ from __future__ import annotations
 
 import numba
 
-JIT_FLAGS: dict = {"cache": True, "fastmath": True, "error_model": "numpy", "nogil": True}
+FASTMATH: set[str] = {"nsz", "arcp", "contract", "afn", "reassoc"}
+JIT_FLAGS: dict = {"cache": True, "fastmath": FASTMATH, "error_model": "numpy", "nogil": True}
 PARALLEL_FLAGS: dict = {**JIT_FLAGS, "parallel": True}
 
 

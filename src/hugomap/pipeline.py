@@ -216,8 +216,10 @@ def piston_point(
         r = analyse_piston(
             h.arrays(), pole, p.area, p.bin_width, sh["gap"],
             residual_tol=sh["residual_tol"], avg_length=sh["avg_length"],
+            u_upstream=-u_p, u_piston=0.0,
         )  # fmt: skip
-        r["u_p_measured"], r["u_p_measured_err"] = r.pop("u_p"), r.pop("u_p_err")
+        # u_p is exact here (the nominal piston speed, the dataset's u_p coordinate).
+        r.pop("u_p"), r.pop("u_p_err")
         values.update(r)
         status = str(r["status"])
         if status != "ok":

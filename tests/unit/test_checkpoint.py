@@ -68,12 +68,6 @@ def test_resume_with_piston_matches_the_same_split_run(tmp_path, thermostat):
     assert c.state.impulse[0] > 0  # the piston did hit atoms
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="src bug: run_steps puts the walls at x_w0 + v_w (t0 + (s+1) dt) with t0 the "
-    "accumulated float state.time, so wall positions (and reflected atoms) depend on how "
-    "the steps were split between advance() calls, hence on the checkpoint step",
-)
 def test_resume_with_piston_and_thermostat_matches_uninterrupted_run(tmp_path):
     n = 60  # (a split that does change the last bits, with or without the JIT)
     a = _make("piston", True)
@@ -82,11 +76,6 @@ def test_resume_with_piston_and_thermostat_matches_uninterrupted_run(tmp_path):
     _assert_same(a, c)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="src bug: state.time is a float sum of advance() chunks, not step * dt "
-    "(see test_resume_with_piston_and_thermostat_matches_uninterrupted_run)",
-)
 def test_split_advance_is_bit_for_bit_with_moving_walls():
     """One atom, no forces, bouncing between two moving walls: 400 steps in one call or in
     400 calls must give the same atom, impulse and clock."""

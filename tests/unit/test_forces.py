@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import hugomap.md.simulation as simmod
 from hugomap.md.forces import energy_virial_full, forces_full, forces_half
 from hugomap.md.neighbor import grid_shape, half_from_full
 from hugomap.md.potential import LJParams
@@ -40,10 +39,8 @@ def _state(kind: str, seed: int = 3, T: float = 0.0) -> MDState:
     return MDState(x=x, v=v, L=L, periodic=periodic, walls0=np.array([0.0, 0.0, L[0], 0.0]))
 
 
-def _sim(monkeypatch, kind: str, half: bool, T: float = 0.0, rc: float = 2.2) -> MDSimulation:
-    # ``use_half`` follows numba's thread count; pin it so both paths run on any machine.
-    monkeypatch.setattr(simmod, "num_threads", lambda: 1 if half else 2)
-    sim = MDSimulation(_state(kind, T=T), LJParams(rc=rc), dt=0.005)
+def _sim(kind: str, half: bool, T: float = 0.0, rc: float = 2.2) -> MDSimulation:
+    sim = MDSimulation(_state(kind, T=T), LJParams(rc=rc), dt=0.005, use_half=half)
     assert sim.use_half is half
     return sim
 
@@ -63,12 +60,12 @@ KINDS = ["periodic", "walled", "slab"]
 
 @pytest.mark.parametrize("half", [False, True], ids=["full", "half"])
 @pytest.mark.parametrize("kind", KINDS)
-def test_simulation_forces_match_brute_force(monkeypatch, kind, half):
+def test_simulation_forces_match_brute_force(kind, half):
     # "slab": a dense slab in a half-empty box. The rows are sized from the mean density,
     # and the first atoms in sorted order (cell 0, inside the slab) have every neighbour at
     # j > i, so their half-list rows are as long as their full rows.
     rc = 2.2
-    sim = _sim(monkeypatch, kind, half, T=1.5, rc=rc)
+    sim = _sim(kind, half, T=1.5, rc=rc)
     s = sim.state
     fref = _assert_forces_match(s.f, s.x, s.L, s.periodic, rc)
     if kind == "walled":  # the walled box really differs from the periodic one
@@ -138,8 +135,8 @@ def test_pairs_between_rc_and_rlist_give_no_force():
 
 
 @pytest.mark.parametrize("kind", ["periodic", "walled"])
-def test_energy_virial_match_brute_force(monkeypatch, kind):
-    sim = _sim(monkeypatch, kind, half=False)
+def test_energy_virial_match_brute_force(kind):
+    sim = _sim(kind, half=False)
     s = sim.state
     pe, vir = sim.per_atom_energy_virial()
     pref, vref, su, sw = ref.energy_virial(s.x, s.L, s.periodic, sim.lj.rc, sim.lj.ushift)
@@ -157,9 +154,9 @@ def test_energy_virial_match_brute_force(monkeypatch, kind):
 
 
 @pytest.mark.parametrize("kind", ["periodic", "walled"])
-def test_force_is_minus_gradient_of_total_energy(monkeypatch, kind):
+def test_force_is_minus_gradient_of_total_energy(kind):
     """F_i = −∂U/∂x_i, U = Σ_i pe_i from energy_virial_full, by central differences."""
-    sim = _sim(monkeypatch, kind, half=False)
+    sim = _sim(kind, half=False)
     s = sim.state
     rc = sim.lj.rc
     rc2 = rc * rc

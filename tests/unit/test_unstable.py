@@ -9,8 +9,6 @@ from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation, MDState, SolverUnstable
 
-from ._reference import NO_JIT
-
 
 def _gas(v0, walls0=(0.0, 0.0, 10.0, 0.0), dt=0.005):
     """Four atoms far apart (no forces) in a 10 × 6 × 6 box walled in x."""
@@ -44,13 +42,6 @@ def test_absurd_velocity_is_cfl():
     assert "reduce dt" in err.value.diagnostic
 
 
-@pytest.mark.xfail(
-    not NO_JIT,
-    strict=True,
-    reason="src bug: the kernels are compiled with fastmath=True, whose nnan/ninf flags let "
-    "LLVM drop the `s2 != s2` and np.isinf tests in drift_walls_wrap/run_steps; with the JIT "
-    "a NaN velocity stops as 'atom_lost' and an infinite one as 'cfl', never 'nan'",
-)
 @pytest.mark.parametrize("bad", [np.nan, np.inf])
 def test_non_finite_velocity_is_nan(bad):
     sim = _gas([bad, 0.0, 0.0])

@@ -76,20 +76,57 @@ def region_state(
 
 
 def jump_residuals(
-    rho0: float, P0: float, E0: float, D: float, u_p: float, rho: float, P: float, E: float
+    rho1: float,
+    P1: float,
+    E1: float,
+    D: float,
+    u: float,
+    rho: float,
+    P: float,
+    E: float,
+    u1: float = 0.0,
 ) -> dict[str, float]:
     """Relative residuals of the three jump conditions (module docstring).
 
-    mass = ρ(D − u_p)/(ρ0 D) − 1;  momentum = (P − P0)/(ρ0 D u_p) − 1;
-    energy = (E − E0)/(½(P + P0)(V0 − V)) − 1.
+    The state ahead of the front is (ρ1, P1, E1) moving at u1 (the pole at rest by default;
+    the elastic precursor's state when a plastic wave follows one), the state behind it
+    (ρ, P, E) moving at u, the front at D (all velocities in the frame of the pole material):
+    mass = ρ(D − u)/(ρ1(D − u1)) − 1;  momentum = (P − P1)/(ρ1 (D − u1)(u − u1)) − 1;
+    energy = (E − E1)/(½(P + P1)(V1 − V)) − 1.
     """
-    V0, V = 1.0 / rho0, 1.0 / rho
+    V1, V = 1.0 / rho1, 1.0 / rho
     with np.errstate(divide="ignore", invalid="ignore"):
         return {
-            "mass": float(rho * (D - u_p) / (rho0 * D) - 1.0),
-            "momentum": float((P - P0) / (rho0 * D * u_p) - 1.0),
-            "energy": float((E - E0) / (0.5 * (P + P0) * (V0 - V)) - 1.0),
+            "mass": float(rho * (D - u) / (rho1 * (D - u1)) - 1.0),
+            "momentum": float((P - P1) / (rho1 * (D - u1) * (u - u1)) - 1.0),
+            "energy": float((E - E1) / (0.5 * (P + P1) * (V1 - V)) - 1.0),
         }
+
+
+_JUMP_ARGS = ("rho1", "P1", "E1", "D", "u", "rho", "P", "E", "u1")
+
+
+def jump_residual_errors(
+    values: dict[str, float], errors: dict[str, float], rel_step: float = 1e-6
+) -> dict[str, float]:
+    """Standard errors of ``jump_residuals`` by first-order propagation.
+
+    ``values``/``errors`` are keyed by the arguments of ``jump_residuals`` (rho1, P1, E1, D,
+    u, rho, P, E, u1; missing errors count as 0). The errors are treated as independent,
+    σ_r² = Σ (∂r/∂x σ_x)², with the derivatives taken by central differences.
+    """
+    base = {k: float(values.get(k, 0.0)) for k in _JUMP_ARGS}
+    var = {k: 0.0 for k in ("mass", "momentum", "energy")}
+    for name in _JUMP_ARGS:
+        sx = float(errors.get(name, 0.0) or 0.0)
+        if not sx > 0:
+            continue
+        h = rel_step * max(abs(base[name]), 1.0)
+        up = jump_residuals(**{**base, name: base[name] + h})
+        dn = jump_residuals(**{**base, name: base[name] - h})
+        for k in var:
+            var[k] += ((up[k] - dn[k]) / (2 * h) * sx) ** 2
+    return {k: float(np.sqrt(v)) for k, v in var.items()}
 
 
 def analyse_piston(
@@ -102,19 +139,35 @@ def analyse_piston(
     residual_tol: float = 0.03,
     min_region: float = 3.0,
     avg_length: float | None = None,
+    u_upstream: float | None = None,
+    u_piston: float | None = None,
+    precursor_sigmas: float = 5.0,
+    precursor_fraction: float = 0.03,
 ) -> dict[str, float | str | bool]:
     """One Hugoniot point from the drive-stage samples of a piston run.
 
     ``h`` holds the history arrays of ``window.piston.History``; ``pole`` the initial state
     (rho0, P0, E0 and their errors). For each drive sample, the shocked slab is
     [max(x_L + gap, x_f − gap − avg_length), x_f − gap] — the most recently shocked material:
-    the material shocked first keeps the entropy of the piston's start-up transient — and the
-    upstream slab [x_f + gap, x_R − gap] (whole bins). Then
+    the material shocked first keeps the entropy of the piston's start-up transient — the
+    slab ahead of the front [x_f + gap, x_f + gap + avg_length] and the upstream slab
+    [x_f + gap, x_R − gap] (whole bins). Then
       D_w = d x_f/dt (line fit over the drive samples), u_a, u_s = upstream and shocked mean
       x velocities, D = D_w − u_a, u_p = u_s − u_a (both relative to the upstream material),
       ρ, P = P_xx, E = e, T: block averages over the samples of the shocked slab's state.
-    Converged when every |jump residual| ≤ ``residual_tol`` (their own statistical errors are
-    a few 1e-3 here) and the fit has at least 2·n_blocks samples.
+    When the upstream velocity ``u_upstream`` is known exactly (the piston removes the sample's
+    drift), it replaces the measured u_a, whose thermal noise √(T/N) would otherwise enter D
+    and u_p; when the piston velocity ``u_piston`` is given too, u_p = u_piston − u_upstream
+    (a steady shocked state moves with the piston). The measured jump u_s − u_a is always
+    returned as ``u_p_measured``.
+
+    Two waves: in a crystal an elastic precursor can run ahead of the tracked (plastic) front.
+    Its state is the one ahead of the front; it is flagged (``two_wave`` = 1) when its P_xx
+    differs from P0 by more than ``precursor_sigmas`` standard errors and more than
+    ``precursor_fraction`` of P − P0, and the jump conditions are then checked across the
+    tracked front from that state (``ahead_*``) instead of from the pole.
+    Converged when every |jump residual| ≤ ``residual_tol`` and the fit has at least
+    2·n_blocks samples; ``residual_*_err`` are the residuals' propagated standard errors.
     """
     from .stats import block_average, line_fit
 
@@ -127,29 +180,38 @@ def analyse_piston(
     nbins = sums.shape[1] if sums.ndim == 3 else 0
     edges = np.arange(nbins + 1) * bin_width
     keys = ("n", "ux", "Pxx", "Pyy", "Pzz", "T", "e")
+    nan_state = {k: np.nan for k in keys}
     shocked = {k: [] for k in keys}
+    ahead = {k: [] for k in keys}
     upstream_u = []
+    length = avg_length if avg_length is not None else np.inf
     for i in range(t.size):
-        lo, hi = xl[i] + gap, xf[i] - gap
-        if avg_length is not None:
-            lo = max(lo, hi - avg_length)
-        if not (np.isfinite(xf[i]) and hi - lo >= min_region):
-            for k in keys:
-                shocked[k].append(np.nan)
-            upstream_u.append(np.nan)
-            continue
-        st = region_state(sums[i], edges, lo, hi, area)
+        lo, hi = max(xl[i] + gap, xf[i] - gap - length), xf[i] - gap
+        a_lo, a_hi = xf[i] + gap, min(xr[i] - gap, xf[i] + gap + length)
+        ok = np.isfinite(xf[i]) and hi - lo >= min_region
+        st = region_state(sums[i], edges, lo, hi, area) if ok else nan_state
+        ok_a = np.isfinite(xf[i]) and a_hi - a_lo >= min_region
+        st_a = region_state(sums[i], edges, a_lo, a_hi, area) if ok_a else nan_state
         for k in keys:
             shocked[k].append(st[k])
-        upstream_u.append(region_state(sums[i], edges, xf[i] + gap, xr[i] - gap, area)["ux"])
+            ahead[k].append(st_a[k])
+        upstream_u.append(
+            region_state(sums[i], edges, xf[i] + gap, xr[i] - gap, area)["ux"] if ok else np.nan
+        )
     D_w, _, D_w_err, _ = line_fit(t, xf)
     out: dict[str, float | str | bool] = {}
     u_a, u_a_err = block_average(np.asarray(upstream_u), n_blocks)
     u_s, u_s_err = block_average(np.asarray(shocked["ux"]), n_blocks)
+    out["u_p_measured"], out["u_p_measured_err"] = u_s - u_a, float(np.hypot(u_s_err, u_a_err))
+    if u_upstream is not None:
+        u_a, u_a_err = float(u_upstream), 0.0
     D = D_w - u_a
-    u_p = u_s - u_a
+    if u_piston is not None and u_upstream is not None:
+        u_p, u_p_err = float(u_piston) - u_a, 0.0
+    else:
+        u_p, u_p_err = u_s - u_a, float(np.hypot(u_s_err, u_a_err))
     out["D"], out["D_err"] = D, float(np.hypot(D_w_err, u_a_err))
-    out["u_p"], out["u_p_err"] = u_p, float(np.hypot(u_s_err, u_a_err))
+    out["u_p"], out["u_p_err"] = u_p, u_p_err
     for key, name in (
         ("n", "rho"),
         ("Pxx", "P"),
@@ -159,6 +221,11 @@ def analyse_piston(
         ("e", "E"),
     ):
         out[name], out[name + "_err"] = block_average(np.asarray(shocked[key]), n_blocks)
+    for key, name in (("n", "rho"), ("Pxx", "P"), ("e", "E"), ("ux", "u")):
+        out["ahead_" + name], out["ahead_" + name + "_err"] = block_average(
+            np.asarray(ahead[key]), n_blocks
+        )
+    out["ahead_u"] = out["ahead_u"] - u_a  # in the frame of the pole material
     rho, P, E = out["rho"], out["P"], out["E"]
     out["V"] = 1.0 / rho
     out["V_err"] = out["rho_err"] / rho**2
@@ -169,8 +236,30 @@ def analyse_piston(
     out["E_minus_E0"] = E - pole["E0"]
     out["E_minus_E0_err"] = float(np.hypot(out["E_err"], pole.get("E0_err", 0.0)))
     out["shear_stress"] = 0.5 * (P - 0.5 * (out["Pyy"] + out["Pzz"]))
-    res = jump_residuals(pole["rho0"], pole["P0"], pole["E0"], D, u_p, rho, P, E)
+    dP_ahead = out["ahead_P"] - pole["P0"]
+    dP_ahead_err = float(np.hypot(out["ahead_P_err"], pole.get("P0_err", 0.0)))
+    two_wave = bool(
+        np.isfinite(dP_ahead)
+        and abs(dP_ahead) > precursor_sigmas * dP_ahead_err
+        and abs(dP_ahead) > precursor_fraction * abs(P - pole["P0"])
+    )
+    out["two_wave"] = float(two_wave)
+    vals = {"D": D, "u": u_p, "rho": rho, "P": P, "E": E}
+    errs = {"D": out["D_err"], "u": u_p_err, "rho": out["rho_err"], "P": out["P_err"]}
+    errs["E"] = out["E_err"]
+    if two_wave:
+        vals.update(rho1=out["ahead_rho"], P1=out["ahead_P"], E1=out["ahead_E"])
+        vals["u1"] = out["ahead_u"]
+        for k, a in (("rho1", "rho"), ("P1", "P"), ("E1", "E"), ("u1", "u")):
+            errs[k] = out[f"ahead_{a}_err"]
+    else:
+        vals.update(rho1=pole["rho0"], P1=pole["P0"], E1=pole["E0"], u1=0.0)
+        for k, a in (("rho1", "rho0"), ("P1", "P0"), ("E1", "E0")):
+            errs[k] = pole.get(a + "_err", 0.0)
+    res = jump_residuals(**vals)
     out.update({f"residual_{k}": v for k, v in res.items()})
+    res_err = jump_residual_errors(vals, errs)
+    out.update({f"residual_{k}_err": v for k, v in res_err.items()})
     n_ok = int(np.isfinite(np.asarray(shocked["n"])).sum())
     out["n_samples"] = n_ok
     finite = all(np.isfinite(v) for v in (D, u_p, rho, P, E))

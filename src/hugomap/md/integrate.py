@@ -34,18 +34,23 @@ STATUS_NAMES = {OK: "ok", GROW: "grow", NAN: "nan", CFL: "cfl", LOST: "atom_lost
 
 
 @pjit
-def kick(v: np.ndarray, f: np.ndarray, h: float) -> None:
-    """v ← v + h F (m = 1)."""
+def kick(v: np.ndarray, f: np.ndarray, ids: np.ndarray, h: float) -> None:
+    """v ← v + h F (m = 1) for every mobile atom; frozen atoms (ids < 0) keep their velocity.
+
+    Frozen atoms are the rigid boundary layers of the moving window (``md.window``): they move
+    at their own constant velocity and act on the mobile atoms through the pair forces."""
     for i in prange(v.shape[0]):
-        v[i, 0] += h * f[i, 0]
-        v[i, 1] += h * f[i, 1]
-        v[i, 2] += h * f[i, 2]
+        if ids[i] >= 0:
+            v[i, 0] += h * f[i, 0]
+            v[i, 1] += h * f[i, 1]
+            v[i, 2] += h * f[i, 2]
 
 
 @njit
 def drift_walls_wrap(
     x: np.ndarray,
     v: np.ndarray,
+    ids: np.ndarray,
     x_ref: np.ndarray,
     dt: float,
     L: np.ndarray,
@@ -53,7 +58,7 @@ def drift_walls_wrap(
     walls: np.ndarray,
     impulse: np.ndarray,
 ) -> tuple[float, float, int]:
-    """x ← x + Δt v, reflect at the walls, wrap periodic dimensions.
+    """x ← x + Δt v, reflect mobile atoms (ids ≥ 0) at the walls, wrap periodic dimensions.
 
     ``walls`` = [x_L, v_L, x_R, v_R] at the end of the step; ``impulse`` (2,) accumulates the
     x-momentum given to atoms by the left and right wall. Returns the largest squared
@@ -73,7 +78,7 @@ def drift_walls_wrap(
             x[i, d] += dxd
         if s2 > max_step2 or s2 != s2:
             max_step2 = s2 if s2 == s2 else np.inf
-        if not periodic[0]:
+        if not periodic[0] and ids[i] >= 0:
             if x[i, 0] < xl:
                 impulse[0] += 2.0 * (vl - v[i, 0])
                 x[i, 0] = 2.0 * xl - x[i, 0]
@@ -184,7 +189,8 @@ def run_steps(
     L: np.ndarray,
     periodic: np.ndarray,
     walls0: np.ndarray,
-    t0: float,
+    t_epoch: float,
+    k0: int,
     dt: float,
     rc2: float,
     rlist2: float,
@@ -204,20 +210,21 @@ def run_steps(
     """Advance up to ``nsteps`` velocity-Verlet steps; return (steps completed, status).
 
     ``walls0`` = [x_L0, v_L, x_R0, v_R]: wall positions at t = 0 and their velocities, so the
-    wall position at time t is x_w0 + v_w t, exact for any restart. ``thermo`` = [T, τ, N_f]
+    wall position at time t is x_w0 + v_w t, with t = t_epoch + k Δt at step k counted from the
+    epoch (``k0`` steps done so far): the same floats however the run is split. ``thermo`` = [T, τ, N_f]
     (T ≤ 0: no thermostat) with ``r1``/``chi`` the per-step random numbers. ``counters``
     [0] counts list builds. On status GROW the step is half done: the caller grows the list,
     rebuilds, and calls ``finish_step``.
     """
     walls = np.empty(4)
     for s in range(nsteps):
-        t = t0 + (s + 1) * dt
+        t = t_epoch + (k0 + s + 1) * dt
         walls[0] = walls0[0] + walls0[1] * t
         walls[1] = walls0[1]
         walls[2] = walls0[2] + walls0[3] * t
         walls[3] = walls0[3]
-        kick(v, f, 0.5 * dt)
-        max_d2, max_step2, bad = drift_walls_wrap(x, v, x_ref, dt, L, periodic, walls, impulse)
+        kick(v, f, ids, 0.5 * dt)
+        max_d2, max_step2, bad = drift_walls_wrap(x, v, ids, x_ref, dt, L, periodic, walls, impulse)
         if max_step2 != max_step2 or max_d2 != max_d2 or np.isinf(max_step2):
             return s, NAN
         if max_step2 > half_skin2:
@@ -232,8 +239,9 @@ def run_steps(
             if need > nbr.shape[1]:
                 return s, GROW
         finish_step(
-            x, v, f, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, dt, thermo, r1[s], chi[s]
-        )
+            x, v, f, ids, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, dt, thermo, r1[s],
+            chi[s],
+        )  # fmt: skip
     return nsteps, OK
 
 
@@ -242,6 +250,7 @@ def finish_step(
     x: np.ndarray,
     v: np.ndarray,
     f: np.ndarray,
+    ids: np.ndarray,
     L: np.ndarray,
     periodic: np.ndarray,
     nbr: np.ndarray,
@@ -257,7 +266,7 @@ def finish_step(
 ) -> None:
     """Second half of a step: F(x), v ← v + ½Δt F, then the thermostat if one is set."""
     compute_forces(x, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, f)
-    kick(v, f, 0.5 * dt)
+    kick(v, f, ids, 0.5 * dt)
     if thermo[0] > 0.0:
         kin = 0.5 * np.sum(v * v)
         nf = int(thermo[2])

@@ -44,7 +44,10 @@ class MDState:
     x, v, f: positions [σ], velocities [σ/τ], forces [ε/σ]; ids (n,) stable atom labels;
     x_ref: positions at the last neighbour-list build; L (3,) box lengths [σ]; periodic (3,)
     bool; walls0 (4,) = [x_L0, v_L, x_R0, v_R] so that wall k sits at x_k0 + v_k t;
-    time [τ]; step; impulse (2,) x-momentum given by the left/right wall [m σ/τ].
+    time [τ]; step; impulse (2,) x-momentum given by the left/right wall [m σ/τ];
+    epoch_time [τ], epoch_step: the time and step at which the current Δt was set, so that
+    time = epoch_time + (step − epoch_step) Δt is computed the same way however a run is split
+    (a float sum of chunks would not be bit-for-bit, and the wall positions depend on it).
     """
 
     x: np.ndarray
@@ -58,6 +61,8 @@ class MDState:
     time: float = 0.0
     step: int = 0
     impulse: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    epoch_time: float = 0.0
+    epoch_step: int = 0
 
     def __post_init__(self) -> None:
         n = self.x.shape[0]
@@ -82,7 +87,8 @@ class MDSimulation:
     """Velocity-Verlet MD of an LJ system in a box with walls in x (or periodic in x).
 
     Parameters: ``state`` (MDState), ``lj`` (LJParams), ``dt`` [τ], optional thermostat
-    temperature ``T_bath`` [ε/k_B] and time constant ``tau_bath`` [τ] (CSVR), ``seed``.
+    temperature ``T_bath`` [ε/k_B] and time constant ``tau_bath`` [τ] (CSVR), ``seed``, and
+    ``use_half`` (Newton's third law on a half list instead of the full list; serial).
     """
 
     def __init__(
@@ -93,16 +99,20 @@ class MDSimulation:
         T_bath: float | None = None,
         tau_bath: float = 0.5,
         seed: int = 0,
+        use_half: bool = False,
     ):
         if not dt > 0:
             raise ValueError(f"dt = {dt}: must be > 0 tau")
         self.state = state
         self.lj = lj
-        self.dt = float(dt)
+        self._dt = float(dt)
+        state.epoch_time, state.epoch_step = float(state.time), int(state.step)
         self.T_bath = T_bath
         self.tau_bath = float(tau_bath)
         self.seed = int(seed)
-        self.use_half = num_threads() == 1
+        # The full list is faster than the half list on one thread too (benchmarks/), and
+        # the half list doubles the list memory, so it is off unless asked for.
+        self.use_half = bool(use_half)
         self.list_builds = 0
         for d in range(3):
             if state.periodic[d] and state.L[d] < 2.0 * lj.rlist:
@@ -158,6 +168,24 @@ class MDSimulation:
 
     # -- time loop ---------------------------------------------------------------------------
     @property
+    def dt(self) -> float:
+        """Time step [τ]."""
+        return self._dt
+
+    @dt.setter
+    def dt(self, value: float) -> None:
+        if not value > 0:
+            raise ValueError(f"dt = {value}: must be > 0 tau")
+        if float(value) != self._dt:
+            # A new epoch: time keeps counting from here in steps of the new dt.
+            self.state.epoch_time, self.state.epoch_step = self.state.time, self.state.step
+            self._dt = float(value)
+
+    def _sync_time(self) -> None:
+        s = self.state
+        s.time = s.epoch_time + (s.step - s.epoch_step) * self._dt
+
+    @property
     def time(self) -> float:
         return self.state.time
 
@@ -182,18 +210,20 @@ class MDSimulation:
     def advance(self, n_steps: int) -> None:
         """Run ``n_steps`` velocity-Verlet steps; raise SolverUnstable if the run breaks."""
         s = self.state
+        if self.T_bath is not None and (s.ids < 0).any():
+            raise ValueError("the thermostat cannot run with frozen atoms (ids < 0)")
         done_total = 0
         thermo, r1, chi, _ = self._thermo_numbers(n_steps)
         counters = np.zeros(1, dtype=np.int64)
         while done_total < n_steps:
             done, code = ig.run_steps(
                 n_steps - done_total, s.x, s.v, s.f, s.ids, s.x_ref, s.L, s.periodic, s.walls0,
-                s.time, self.dt, self.lj.rc**2, self.lj.rlist**2, (0.5 * self.lj.skin) ** 2,
+                s.epoch_time, s.step - s.epoch_step, self.dt, self.lj.rc**2, self.lj.rlist**2, (0.5 * self.lj.skin) ** 2,
                 self.nc, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, s.impulse,
                 thermo, r1[done_total:], chi[done_total:], counters,
             )  # fmt: skip
-            s.time = s.time + done * self.dt
             s.step += done
+            self._sync_time()
             done_total += done
             if code == ig.OK:
                 break
@@ -202,12 +232,12 @@ class MDSimulation:
                 self._alloc_lists(int(self.nbr.shape[1] * 1.5) + 8)
                 self._build_list(sort=False)
                 ig.finish_step(
-                    s.x, s.v, s.f, s.L, s.periodic, self.nbr, self.nnb, self.use_half,
+                    s.x, s.v, s.f, s.ids, s.L, s.periodic, self.nbr, self.nnb, self.use_half,
                     self.half, self.nhalf, self.lj.rc**2, self.dt, thermo,
                     r1[done_total], chi[done_total],
                 )  # fmt: skip
-                s.time = s.time + self.dt
                 s.step += 1
+                self._sync_time()
                 done_total += 1
                 continue
             raise SolverUnstable(ig.STATUS_NAMES[code], self._diagnose(code))
@@ -240,6 +270,28 @@ class MDSimulation:
         t = self.state.time
         self.state.walls0[:] = [xl - v_left * t, v_left, xr - v_right * t, v_right]
 
+    def place_walls(self, x_left: float, v_left: float, x_right: float, v_right: float) -> None:
+        """Put the walls at ``x_left``/``x_right`` [σ] now, moving at ``v_left``/``v_right``
+        [σ/τ]."""
+        t = self.state.time
+        self.state.walls0[:] = [x_left - v_left * t, v_left, x_right - v_right * t, v_right]
+
+    def replace_atoms(self, x: np.ndarray, v: np.ndarray, ids: np.ndarray) -> None:
+        """Replace the atom set (the window's inflow and outflow add and remove atoms).
+
+        The list is rebuilt (sorted) and the forces recomputed at the new positions, so the
+        next step is a plain velocity-Verlet step of the new system."""
+        s = self.state
+        s.x = np.ascontiguousarray(x, dtype=np.float64)
+        s.v = np.ascontiguousarray(v, dtype=np.float64)
+        s.ids = np.ascontiguousarray(ids, dtype=np.int64)
+        s.f = np.zeros_like(s.x)
+        s.x_ref = s.x.copy()
+        if self.nnb.shape[0] != s.n:
+            self._alloc_lists(max(int(self.nbr.shape[1]), 16))
+        self._build_list(sort=True)
+        ig.compute_forces(*self._force_args(), s.f)
+
     def galilean_shift(self, du: float) -> None:
         """Add ``du`` [σ/τ] to every x velocity and to both wall velocities."""
         self.state.v[:, 0] += du
@@ -257,23 +309,38 @@ class MDSimulation:
         )
         return pe, vir
 
+    def mobile(self) -> np.ndarray:
+        """Boolean mask of the mobile atoms (frozen boundary atoms have ids < 0)."""
+        return self.state.ids >= 0
+
     def profile_sums(self, width: float) -> np.ndarray:
-        """Raw per-bin sums (nbins, len(SUM_FIELDS)) over slabs of ``width`` [σ] along x."""
+        """Raw per-bin sums (nbins, len(SUM_FIELDS)) of the mobile atoms over slabs of
+        ``width`` [σ] along x (a frozen atom's share of a pair's energy and virial counts for
+        the mobile partner's half only)."""
         s = self.state
         nbins = int(math.floor(s.L[0] / width + 1e-9))
         out = np.zeros((nbins, len(SUM_FIELDS)))
         pe, vir = self.per_atom_energy_virial()
-        bin_sums(s.x, s.v, pe, vir, width, out)
+        m = self.mobile()
+        if m.all():
+            bin_sums(s.x, s.v, pe, vir, width, out)
+        else:
+            bin_sums(s.x[m], s.v[m], pe[m], vir[m], width, out)
         return out
 
     def energies(self) -> tuple[float, float]:
-        """Total kinetic and potential energy [ε]."""
+        """Total kinetic and potential energy of the mobile atoms [ε]."""
         pe, _ = self.per_atom_energy_virial()
-        return 0.5 * float(np.sum(self.state.v**2)), float(np.sum(pe))
+        m = self.mobile()
+        return 0.5 * float(np.sum(self.state.v[m] ** 2)), float(np.sum(pe[m]))
 
     def momentum(self) -> np.ndarray:
-        """Total momentum (3,) [m σ/τ]."""
-        return self.state.v.sum(axis=0)
+        """Total momentum (3,) of the mobile atoms [m σ/τ]."""
+        return self.state.v[self.mobile()].sum(axis=0)
+
+    def mean_velocity(self) -> float:
+        """Mean x velocity of the mobile atoms [σ/τ] (all masses are 1)."""
+        return float(self.state.v[self.mobile(), 0].mean())
 
     # -- checkpoints -------------------------------------------------------------------------
     def to_dataset(self, extra: xr.Dataset | None = None, attrs: dict | None = None) -> xr.Dataset:
@@ -300,6 +367,8 @@ class MDSimulation:
             format=CHECKPOINT_FORMAT,
             time=float(s.time),
             step=int(s.step),
+            epoch_time=float(s.epoch_time),
+            epoch_step=int(s.epoch_step),
             dt=self.dt,
             lj=json.dumps({"rc": self.lj.rc, "shift": self.lj.shift, "skin": self.lj.skin}),
             thermostat=json.dumps(
@@ -333,17 +402,19 @@ class MDSimulation:
             f=ds["f"].values.copy(), ids=ds["ids"].values.astype(np.int64),
             x_ref=ds["x_ref"].values.copy(), time=float(ds.attrs["time"]),
             step=int(ds.attrs["step"]), impulse=ds["impulse"].values.copy(),
+            epoch_time=float(ds.attrs.get("epoch_time", ds.attrs["time"])),
+            epoch_step=int(ds.attrs.get("epoch_step", ds.attrs["step"])),
         )  # fmt: skip
         lj = LJParams(**json.loads(ds.attrs["lj"]))
         th = json.loads(ds.attrs["thermostat"])
         sim = cls.__new__(cls)
         sim.state = state
         sim.lj = lj
-        sim.dt = float(ds.attrs["dt"])
+        sim._dt = float(ds.attrs["dt"])
         sim.T_bath = None if th is None else th["T"]
         sim.tau_bath = 0.5 if th is None else th["tau"]
         sim.seed = int(ds.attrs["seed"])
-        sim.use_half = num_threads() == 1
+        sim.use_half = False
         sim.list_builds = 0
         sim.nc = grid_shape(state.L, lj.rlist)
         density = state.n / float(np.prod(state.L))

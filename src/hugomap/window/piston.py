@@ -86,8 +86,13 @@ class StageFailed(RuntimeError):
 
 
 def start_piston(solver: ShockSolver, u_p: float) -> None:
-    """Put a sample at rest into the piston frame: material at −u_p, piston wall at rest."""
-    solver.galilean_shift(-u_p)
+    """Put a sample into the piston frame: material at −u_p, piston wall at rest.
+
+    The sample's own mean x velocity (a thermal drift of order √(T/N) left by the walls and
+    thermostat of the preparation) is removed first, so the upstream flow is exactly −u_p and
+    the particle-velocity jump is exactly u_p: the shocked material moves with the piston.
+    """
+    solver.galilean_shift(-u_p - solver.mean_velocity())
     solver.set_walls(0.0, -u_p)
 
 

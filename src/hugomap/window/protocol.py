@@ -33,6 +33,9 @@ class ShockSolver(Protocol):
     def set_walls(self, v_left: float, v_right: float) -> None:
         """Velocities of the left and right boundaries in the simulation frame."""
 
+    def mean_velocity(self) -> float:
+        """Mass-weighted mean x velocity of the material in the domain."""
+
     def galilean_shift(self, du: float) -> None:
         """Add ``du`` to every x velocity and to both boundary velocities."""
 

@@ -1,0 +1,239 @@
+"""Moving-window methods, written once for every solver: the ω signal, AMW, MW, fixed runs for
+the dichotomy, and the steady-state measurement shared by all of them.
+
+The solver is any object with the window protocol (``md.window.MDWindow``): ``advance``,
+``time``, ``dt``, ``u_in``, ``u_out``, ``geom`` (x_lo, x_hi, length), ``area``,
+``galilean_shift``, ``set_outflow``, ``count_in_window`` and ``profile_sums``.
+
+Front signal (SEED-en.md, reading notes). With the window [x_lo, x_hi] of length L holding
+upstream material (density ρ0, stress P0) ahead of the front x_f and shocked material (ρ1, P1)
+behind it,
+    N  = A [ρ1 (x_f − x_lo) + ρ0 (x_hi − x_f)],   Σσ = A [P1 (x_f − x_lo) + P0 (x_hi − x_f)],
+so ω = (q − q_up)/(q_sh − q_up) = (x_f − x_lo)/L for q = N or Σσ (q_up, q_sh: the window full
+of upstream or of shocked material), and L dω/dt is the front velocity in the window frame.
+
+AMW (adaptive moving window): over each averaging window k, a least-squares fit
+ω(t) = a_k t + b_k with standard error s_k; the Galilean shift Δu_k = −β L a_k (the source's
+correction); steady when |a_k| ≤ z s_k for M consecutive windows. The amplitude u_p =
+u_out − u_in is held, the front speed D is found.
+MW: the inflow (so D) is held and u_out is steered, u_out ← u_out − g_v L a_k
+− g_x L (ω̄_k − ω*) (a proportional-integral controller on the front position), so the
+amplitude settles to the u_p whose D matches the window.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..analysis.stats import line_fit
+from ..md.profiles import fields_from_sums
+
+
+@dataclass
+class OmegaSignal:
+    """ω from the atom count (``kind`` = "N") or the longitudinal stress sum ("stress");
+    ``q_up``/``q_sh``: the value for a window full of upstream / shocked material."""
+
+    kind: str
+    q_up: float
+    q_sh: float
+    bin_width: float
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("N", "stress"):
+            raise ValueError(f"omega kind {self.kind!r}: allowed 'N' or 'stress'")
+        if not abs(self.q_sh - self.q_up) > 0:
+            raise ValueError("omega normalisation: shocked and upstream values are equal")
+
+    @classmethod
+    def from_states(
+        cls, kind: str, length: float, area: float, up: dict, sh: dict, bin_width: float
+    ) -> OmegaSignal:
+        """Normalise from the upstream and shocked states ({'n', 'Pxx'} per unit volume)."""
+        key = "n" if kind == "N" else "Pxx"
+        return cls(kind, up[key] * area * length, sh[key] * area * length, bin_width)
+
+    def raw(self, solver) -> float:
+        if self.kind == "N":
+            return float(solver.count_in_window())
+        sums = solver.profile_sums(self.bin_width)
+        w = self.bin_width
+        edges = np.arange(sums.shape[0] + 1) * w
+        inside = (edges[:-1] >= solver.geom.x_lo - 1e-9) & (edges[1:] <= solver.geom.x_hi + 1e-9)
+        f = fields_from_sums(sums[inside], solver.area * w)
+        return float(np.nansum(f["Pxx"]) * solver.area * w)
+
+    def __call__(self, solver) -> float:
+        """ω = (x_f − x_lo)/L estimated from the signal (dimensionless)."""
+        return (self.raw(solver) - self.q_up) / (self.q_sh - self.q_up)
+
+
+@dataclass
+class ControlHistory:
+    """Per averaging window k: end time [τ], slope a_k [1/τ] and its error, mean ω, u_in,
+    u_out [σ/τ or the solver's units], the applied Δu, and the raw ω samples (t, ω)."""
+
+    t: list = field(default_factory=list)
+    a: list = field(default_factory=list)
+    a_err: list = field(default_factory=list)
+    omega: list = field(default_factory=list)
+    u_in: list = field(default_factory=list)
+    u_out: list = field(default_factory=list)
+    du: list = field(default_factory=list)
+    samples_t: list = field(default_factory=list)
+    samples_omega: list = field(default_factory=list)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {k: np.asarray(v, dtype=float) for k, v in self.__dict__.items()}
+
+
+@dataclass
+class ControlResult:
+    converged: bool
+    status: str
+    diagnostic: str
+    windows: int
+
+
+def sample_omega(solver, signal: OmegaSignal, duration: float, every: int) -> tuple:
+    """Run ``duration`` sampling ω every ``every`` steps; return (t, ω) arrays."""
+    n = max(3, int(round(duration / (every * solver.dt))))
+    t, w = np.empty(n), np.empty(n)
+    for i in range(n):
+        solver.advance(every)
+        t[i], w[i] = solver.time, signal(solver)
+    return t, w
+
+
+def _record(h: ControlHistory, solver, t, w, a, se, du) -> None:
+    h.t.append(float(t[-1]))
+    h.a.append(a)
+    h.a_err.append(se)
+    h.omega.append(float(np.mean(w)))
+    h.u_in.append(solver.u_in)
+    h.u_out.append(solver.u_out)
+    h.du.append(du)
+    h.samples_t.extend(map(float, t))
+    h.samples_omega.extend(map(float, w))
+
+
+def _check_inside(w: np.ndarray, margin: float) -> str | None:
+    if not np.all(np.isfinite(w)):
+        return "omega is not finite"
+    if w.min() < margin or w.max() > 1.0 - margin:
+        return f"the front left the window (omega in [{w.min():.3f}, {w.max():.3f}])"
+    return None
+
+
+def amw(
+    solver,
+    signal: OmegaSignal,
+    beta: float,
+    window_time: float,
+    calm_windows: int,
+    max_windows: int,
+    every: int,
+    z: float = 2.0,
+    edge_margin: float = 0.05,
+    history: ControlHistory | None = None,
+    on_window: Callable[[], None] | None = None,
+) -> tuple[ControlResult, ControlHistory]:
+    """AMW (module docstring): shift the frame by −β L a_k after each averaging window."""
+    h = history or ControlHistory()
+    L = solver.geom.length
+    calm = 0
+    for k in range(max_windows):
+        t, w = sample_omega(solver, signal, window_time, every)
+        a, _, se, _ = line_fit(t, w)
+        bad = _check_inside(w, edge_margin)
+        if bad:
+            _record(h, solver, t, w, a, se, 0.0)
+            return ControlResult(False, "front_left_window", bad, k + 1), h
+        calm = calm + 1 if abs(a) <= z * se else 0
+        du = -beta * L * a
+        _record(h, solver, t, w, a, se, du)
+        if calm >= calm_windows:
+            return ControlResult(True, "ok", "", k + 1), h
+        solver.galilean_shift(du)
+        if on_window is not None:
+            on_window()
+    return (
+        ControlResult(
+            False, "never_steady",
+            f"|a_k| > {z} s_k within the last {calm_windows} of {max_windows} windows "
+            f"(last a = {h.a[-1]:.3g} +- {h.a_err[-1]:.2g} 1/time)",
+            max_windows,
+        ),
+        h,
+    )  # fmt: skip
+
+
+def mw(
+    solver,
+    signal: OmegaSignal,
+    gain_rate: float,
+    gain_position: float,
+    target: float,
+    window_time: float,
+    calm_windows: int,
+    max_windows: int,
+    every: int,
+    z: float = 2.0,
+    edge_margin: float = 0.05,
+    history: ControlHistory | None = None,
+    on_window: Callable[[], None] | None = None,
+) -> tuple[ControlResult, ControlHistory]:
+    """MW (module docstring): the inflow is held and u_out is steered."""
+    h = history or ControlHistory()
+    L = solver.geom.length
+    calm = 0
+    for k in range(max_windows):
+        t, w = sample_omega(solver, signal, window_time, every)
+        a, _, se, _ = line_fit(t, w)
+        bad = _check_inside(w, edge_margin)
+        if bad:
+            _record(h, solver, t, w, a, se, 0.0)
+            return ControlResult(False, "front_left_window", bad, k + 1), h
+        calm = calm + 1 if abs(a) <= z * se else 0
+        du = -gain_rate * L * a - gain_position * L * (float(np.mean(w)) - target)
+        _record(h, solver, t, w, a, se, du)
+        if calm >= calm_windows:
+            return ControlResult(True, "ok", "", k + 1), h
+        solver.set_outflow(solver.u_out + du)
+        if on_window is not None:
+            on_window()
+    return (
+        ControlResult(
+            False, "never_steady",
+            f"|a_k| > {z} s_k within the last {calm_windows} of {max_windows} windows",
+            max_windows,
+        ),
+        h,
+    )  # fmt: skip
+
+
+def fixed_run(
+    solver, signal: OmegaSignal, duration: float, every: int, edge_margin: float = 0.02
+) -> dict[str, float | str]:
+    """One dichotomy trial: run at the current (u_in, u_out), fit ω(t); return ⟨dω/dt⟩ with
+    its standard error, the front speed in the window frame L⟨dω/dt⟩, and a status."""
+    t, w = sample_omega(solver, signal, duration, every)
+    a, b, se, _ = line_fit(t, w)
+    bad = _check_inside(w, edge_margin)
+    L = solver.geom.length
+    return {
+        "u_out": solver.u_out,
+        "u_in": solver.u_in,
+        "slope": a,
+        "slope_err": se,
+        "front_velocity": L * a,
+        "front_velocity_err": L * se,
+        "omega_mean": float(np.mean(w)),
+        "status": "front_left_window" if bad else "ok",
+        "diagnostic": bad or "",
+        "t": t,
+        "omega": w,
+    }
