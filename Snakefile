@@ -31,6 +31,7 @@ except ConfigError as exc:
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/md.smk"
+include: "workflow/rules/window.smk"
 include: "workflow/rules/hugoniot.smk"
 
 

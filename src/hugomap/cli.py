@@ -38,6 +38,27 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--loaded", required=True)
     p.add_argument("--u-p", type=float, required=True)
     stage("reference", "equilibrium-MD reference Hugoniot")
+    p = stage("window", "cut the moving window out of the loading checkpoint")
+    p.add_argument("--loaded", required=True)
+    p.add_argument("--u-p", type=float, required=True)
+    for name in ("amw", "mw"):
+        p = stage(name, f"{name.upper()} point from the window checkpoint")
+        p.add_argument("--window", required=True)
+        p.add_argument("--u-p", type=float, required=True)
+    p = stage("dichotomy-state", "iteration k of the dichotomy's loop state (JSON)")
+    p.add_argument("--window", required=True)
+    p.add_argument("--k", type=int, required=True)
+    p.add_argument("--previous", default=None)
+    p.add_argument("trials", nargs="*")
+    p = stage("dichotomy-trial", "one dichotomy trial at u_out = state.pending[index]")
+    p.add_argument("--window", required=True)
+    p.add_argument("--state", required=True)
+    p.add_argument("--index", type=int, required=True)
+    p = stage("dichotomy-point", "final refinement at the bisection's root")
+    p.add_argument("--window", required=True)
+    p.add_argument("--u-p", type=float, required=True)
+    p.add_argument("--state", required=True)
+    p.add_argument("trials", nargs="*")
     p = sub.add_parser("aggregate", help="join a scene's points into one dataset")
     p.add_argument("--config-json", required=True)
     p.add_argument("--scene-name", required=True)
@@ -50,8 +71,29 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--dup", required=True)
     p = sub.add_parser("check-config", help="validate a YAML config")
     p.add_argument("config")
+    p = sub.add_parser(
+        "status", help="a sweep's progress: points done, running, failed, pending per scene"
+    )
+    p.add_argument("--results", default="results", help="results folder (default: results)")
+    p.add_argument(
+        "--config",
+        default=None,
+        help="the sweep's config (default: config/config.yaml if present, else the scenes "
+        "found under --results)",
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable JSON output")
     args = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s")
+
+    if args.cmd == "status":  # reads files only: no solver imports
+        from .config import ConfigError
+        from .status import run_status
+
+        try:
+            return run_status(args.results, args.config, as_json=args.json)
+        except ConfigError as exc:
+            print(exc, file=sys.stderr)
+            return 2
 
     from . import pipeline
 
@@ -63,6 +105,21 @@ def main(argv: list[str] | None = None) -> int:
         pipeline.piston_point(args.loaded, _scene(args), args.u_p, args.out)
     elif args.cmd == "reference":
         pipeline.reference_stage(_scene(args), args.out)
+    elif args.cmd in ("window", "amw", "mw") or args.cmd.startswith("dichotomy"):
+        from . import pipeline_window as pw
+
+        if args.cmd == "window":
+            pw.window_start(args.loaded, _scene(args), args.u_p, args.out)
+        elif args.cmd in ("amw", "mw"):
+            pw.control_point(args.window, _scene(args), args.u_p, args.out, args.cmd)
+        elif args.cmd == "dichotomy-state":
+            pw.dichotomy_state(args.window, _scene(args), args.k, args.previous, args.trials,
+                               args.out)  # fmt: skip
+        elif args.cmd == "dichotomy-trial":
+            pw.dichotomy_trial(args.window, _scene(args), args.state, args.index, args.out)
+        else:
+            pw.dichotomy_point(args.window, _scene(args), args.u_p, args.state, args.trials,
+                               args.out)  # fmt: skip
     elif args.cmd == "aggregate":
         pipeline.aggregate(
             args.points, args.reference, json.loads(args.config_json), args.scene_name, args.out

@@ -4,7 +4,13 @@ A bad config is refused before any job starts: ``validate_config`` collects ever
 raises one ``ConfigError`` whose lines name the key (as a dotted path), the value and the
 allowed range. The schema (``workflow/schemas/config.schema.json``, draft 2020-12) holds the
 per-key ranges and defaults; the checks here are the ones that involve several keys (a bin
-wider than the box, a cutoff longer than half the transverse box).
+wider than the box, a cutoff longer than half the transverse box, two piston velocities that
+would share one point folder).
+
+Whatever the input (YAML allows NaN, ±inf, non-string keys, dates, self-containing anchors),
+the only exception is ``ConfigError``: NaN and ±inf are not numbers here (they pass every
+range comparison), keys are sorted and printed whatever their type, and every value in a
+message is shortened to one line (``tests/unit/test_config_fuzz.py`` fuzzes this).
 """
 
 from __future__ import annotations
@@ -12,6 +18,9 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
+import math
+import re
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -25,11 +34,61 @@ class ConfigError(ValueError):
     """A config that cannot run; the message lists every problem, one per line."""
 
 
-def _path(parts) -> str:
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+# Integers longer than this (about 308 digits) are out of every range. Beyond about 14,000
+# bits Python cannot even print them, which would crash jsonschema's own messages, so they
+# are refused before the schema runs.
+_MAX_INT_BITS = 1024
+
+
+def key_path(parts: Iterable[Any]) -> str:
+    """A config key path as text: ``scenes.lj_liquid.shock.u_p[0]``; keys that are not
+    identifiers are quoted (``scenes['a b']``); the empty path is ``(top level)``."""
     out = ""
     for p in parts:
-        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+        if isinstance(p, int) and not isinstance(p, bool):
+            out += f"[{p}]"
+        elif isinstance(p, str) and _IDENT.fullmatch(p):
+            out += f".{p}" if out else p
+        else:
+            out += f"[{_show(p)}]"
     return out or "(top level)"
+
+
+def point_tag(u: float) -> str:
+    """Folder tag of a piston velocity, ``up<tag>`` (6 significant digits: 2.0 -> '2')."""
+    return f"{float(u):.6g}"
+
+
+def _show(value: Any, limit: int = 60) -> str:
+    """``repr`` of a config value, shortened to ``limit`` characters for a one-line message."""
+    if (
+        isinstance(value, int)
+        and not isinstance(value, bool)
+        and value.bit_length() > _MAX_INT_BITS
+    ):
+        return f"<integer of about {int(value.bit_length() * math.log10(2)) + 1} digits>"
+    try:
+        text = repr(value)
+    except (ValueError, RecursionError):  # an unprintable number, a self-containing value
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _finite(value: Any) -> bool:
+    """A number JSON can carry: not NaN or ±inf (which every range check lets through)."""
+    return _is_number(value) and (not isinstance(value, float) or math.isfinite(value))
+
+
+def _is_integer(value: Any) -> bool:
+    """An int, or a float with an integral finite value (JSON Schema's ``integer``)."""
+    if isinstance(value, float):
+        return math.isfinite(value) and value.is_integer()
+    return _is_number(value)
 
 
 def _range(schema: dict) -> str:
@@ -41,24 +100,70 @@ def _range(schema: dict) -> str:
 
 
 def _message(err: jsonschema.ValidationError) -> str:
-    where = _path(err.absolute_path)
+    where = key_path(err.absolute_path)
     s = err.schema if isinstance(err.schema, dict) else {}
     v = err.validator
+    shown = _show(err.instance)
+    if "propertyNames" in err.absolute_schema_path:
+        # The instance is a key of the object at ``where``, not a value.
+        reserved = s.get("not", {}).get("enum", [])
+        return (
+            f"{where}: key {shown} is not allowed; names must be a letter followed by letters, "
+            f"digits or _ (pattern {s.get('pattern')})"
+            + (f", and not one of {reserved}" if reserved else "")
+        )
     if v in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"):
         desc = f" ({s['description']})" if "description" in s else ""
-        return f"{where} = {err.instance!r}: out of range; allowed range {_range(s)}{desc}"
+        return f"{where} = {shown}: out of range; allowed range {_range(s)}{desc}"
     if v == "additionalProperties":
         allowed = sorted(s.get("properties", {}))
-        extra = sorted(set(err.instance) - set(allowed))
-        return f"{where}: unknown key(s) {extra}; allowed keys: {allowed}"
+        extra = sorted(set(err.instance) - set(allowed), key=str)
+        return f"{where}: unknown key(s) {_show(extra, 200)}; allowed keys: {allowed}"
     if v in ("enum", "const"):
         allowed = s.get("enum", [s.get("const")])
-        return f"{where} = {err.instance!r}: allowed values {allowed}"
+        return f"{where} = {shown}: allowed values {allowed}"
     if v == "required":
         return f"{where}: {err.message}"
     if v == "type":
-        return f"{where} = {err.instance!r}: must be of type {s.get('type')}"
-    return f"{where}: {err.message}"
+        if _is_number(err.instance) and s.get("type") in ("number", "integer"):
+            return (
+                f"{where} = {shown}: not a finite number; allowed range {_range(s)}"
+                if isinstance(err.instance, float) and not math.isfinite(err.instance)
+                else f"{where} = {shown}: must be of type {s['type']}; allowed range {_range(s)}"
+            )
+        return f"{where} = {shown}: must be of type {s.get('type')}"
+    if v in ("minItems", "maxItems"):
+        return f"{where} = {shown}: needs {'at least' if v == 'minItems' else 'at most'} {err.validator_value} item(s)"
+    if v == "minProperties":
+        return f"{where} = {shown}: needs at least {err.validator_value} entry"
+    if v == "uniqueItems":
+        return f"{where} = {shown}: items must be distinct"
+    return f"{where}: {_show(err.message, 200)}"
+
+
+def _huge(value: Any) -> bool:
+    return _is_number(value) and isinstance(value, int) and value.bit_length() > _MAX_INT_BITS
+
+
+def _huge_integers(cfg: Any) -> list[str]:
+    """Paths of integers too long to print or compare sensibly (walked without recursion;
+    shared or self-containing YAML anchors are visited once)."""
+    out, seen, todo = [], set(), [((), cfg)]
+    while todo:
+        where, node = todo.pop()
+        if isinstance(node, dict | list):
+            if id(node) in seen:
+                continue
+            seen.add(id(node))
+            items = node.items() if isinstance(node, dict) else enumerate(node)
+            for k, v in items:
+                if _huge(k):
+                    out.append(f"{key_path(where)}: key {_show(k)} is not allowed")
+                else:
+                    todo.append(((*where, k), v))
+        elif _huge(node):
+            out.append(f"{key_path(where)} = {_show(node)}: out of range")
+    return sorted(out)
 
 
 def _with_defaults(cls):
@@ -71,7 +176,11 @@ def _with_defaults(cls):
                     instance[key] = copy.deepcopy(sub["default"])
         yield from validate_props(validator, properties, instance, schema)
 
-    return jsonschema.validators.extend(cls, {"properties": set_defaults})
+    # NaN and ±inf pass every minimum/maximum comparison, so they are not numbers here.
+    checker = cls.TYPE_CHECKER.redefine_many(
+        {"number": lambda _, x: _finite(x), "integer": lambda _, x: _is_integer(x)}
+    )
+    return jsonschema.validators.extend(cls, {"properties": set_defaults}, type_checker=checker)
 
 
 _Validator = _with_defaults(jsonschema.Draft202012Validator)
@@ -89,49 +198,82 @@ def lattice_constant(rho: float) -> float:
 
 
 def _cross_checks(cfg: dict) -> list[str]:
+    """Checks that involve several keys; each message names every key it depends on."""
     problems = []
     for name, sc in cfg.get("scenes", {}).items():
         base = f"scenes.{name}"
-        a = lattice_constant(sc["sample"]["rho0"])
-        L = [c * a for c in sc["sample"]["cells"]]
-        pot = sc["potential"]
+        smp, pot, sh = sc["sample"], sc["potential"], sc["shock"]
+        a = lattice_constant(smp["rho0"])
+        L = [c * a for c in smp["cells"]]
         rlist = pot["rc"] + pot["skin"]
         half_t = 0.5 * min(L[1], L[2])
+        box = f"sample.cells = {smp['cells']} at sample.rho0 = {smp['rho0']}"
         if rlist > half_t:
             problems.append(
                 f"{base}.potential.rc = {pot['rc']}: rc + skin must not exceed half the "
                 f"transverse box; allowed range (1.0, {half_t - pot['skin']:.4g}] sigma "
-                f"for sample.cells = {sc['sample']['cells']} at rho0 = {sc['sample']['rho0']}"
+                f"with potential.skin = {pot['skin']} for {box}"
             )
-        sh = sc["shock"]
         if sh["bin_width"] >= L[0] / 4:
             problems.append(
                 f"{base}.shock.bin_width = {sh['bin_width']}: wider than the box allows; "
-                f"allowed range (0, {L[0] / 4:.4g}) sigma (a quarter of L_x = {L[0]:.4g})"
+                f"allowed range (0, {L[0] / 4:.4g}) sigma (a quarter of L_x = {L[0]:.4g} "
+                f"for {box})"
             )
-        if 2 * sh["gap"] + sh["rear_margin"] >= L[0] * (1 - sh["load_fraction"]):
+        rest = L[0] * (1 - sh["load_fraction"])
+        if 2 * sh["gap"] + sh["rear_margin"] >= rest:
             problems.append(
-                f"{base}.shock.gap = {sh['gap']}: 2·gap + rear_margin must be shorter than the "
-                f"part of the sample left after loading, {L[0] * (1 - sh['load_fraction']):.4g} sigma"
+                f"{base}.shock.gap = {sh['gap']}: 2·gap + shock.rear_margin "
+                f"(= {sh['rear_margin']}) must be shorter than the part of the sample left "
+                f"after loading, (1 - shock.load_fraction) L_x = {rest:.4g} sigma with "
+                f"shock.load_fraction = {sh['load_fraction']} for {box}"
             )
+        seen: dict[str, int] = {}
+        for i, u in enumerate(sh["u_p"]):
+            tag = point_tag(u)
+            if tag in seen:
+                problems.append(
+                    f"{base}.shock.u_p[{i}] = {u}: same point folder up{tag} as "
+                    f"shock.u_p[{seen[tag]}] = {sh['u_p'][seen[tag]]}; piston velocities "
+                    f"must differ in their first 6 significant digits"
+                )
+            seen.setdefault(tag, i)
         if sc["phase"] == "liquid" and "reference" in sc:
-            cells = sc["reference"]["cells"]
-            rho_max = sc["sample"]["rho0"] * max(sc["reference"]["compressions"])
-            Lref = cells * lattice_constant(rho_max)
+            ref = sc["reference"]
+            rho_max = smp["rho0"] * max(ref["compressions"])
+            Lref = ref["cells"] * lattice_constant(rho_max)
             if Lref < 2 * rlist:
                 problems.append(
-                    f"{base}.reference.cells = {cells}: the periodic reference box at the highest "
-                    f"compression is {Lref:.3g} sigma, shorter than 2 (rc + skin) = {2 * rlist:.3g}; "
-                    f"use more cells"
+                    f"{base}.reference.cells = {ref['cells']}: the periodic reference box of a "
+                    f"phase = liquid scene at "
+                    f"the highest compression (reference.compressions max "
+                    f"{max(ref['compressions'])} x sample.rho0 = {smp['rho0']}) is "
+                    f"{Lref:.3g} sigma, shorter than 2 (potential.rc + potential.skin) = "
+                    f"{2 * rlist:.3g}; use more cells"
                 )
     return problems
 
 
-def validate_config(cfg: dict, schema: dict | None = None) -> dict:
-    """Validate ``cfg`` in place (filling defaults) and return it; raise ConfigError."""
-    schema = schema or load_schema()
-    errors = sorted(_Validator(schema).iter_errors(cfg), key=lambda e: list(e.absolute_path))
-    problems = [_message(e) for e in errors]
+def validate_config(cfg: Any, schema: dict | None = None) -> dict:
+    """Validate ``cfg`` in place (filling defaults) and return it; raise ConfigError.
+
+    Anything that is not a valid config (wrong types, NaN, unknown keys, non-string keys,
+    self-containing YAML anchors) is refused with a ConfigError naming the key path; no
+    other exception escapes.
+    """
+    problems = _huge_integers(cfg)
+    if not problems:
+        schema = schema or load_schema()
+        try:
+            errors = sorted(
+                _Validator(schema).iter_errors(cfg),
+                key=lambda e: [(isinstance(p, str), str(p)) for p in e.absolute_path],
+            )
+        except RecursionError:
+            raise ConfigError(
+                "invalid config:\n  (top level): a value contains itself (recursive YAML anchor)"
+            ) from None
+        problems = [_message(e) for e in errors]
     if not problems:
         problems = _cross_checks(cfg)
     if problems:
@@ -140,10 +282,24 @@ def validate_config(cfg: dict, schema: dict | None = None) -> dict:
 
 
 def load_config(path: str | Path) -> dict:
-    """Read a YAML config and validate it."""
-    with open(path) as fh:
-        cfg = yaml.safe_load(fh) or {}
-    return validate_config(cfg)
+    """Read a YAML config and validate it; an unreadable file or invalid YAML is a
+    ConfigError that names the file (and the line, where YAML gives one)."""
+    try:
+        with open(path) as fh:
+            cfg = yaml.safe_load(fh)
+    except OSError as exc:
+        raise ConfigError(f"invalid config: {path}: cannot read: {exc.strerror or exc}") from None
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark
+        where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark else ""
+        raise ConfigError(
+            f"invalid config: {path}: not valid YAML{where}: {exc.problem or exc}"
+        ) from None
+    except (yaml.YAMLError, ValueError, UnicodeDecodeError, RecursionError) as exc:
+        # e.g. a date like 2020-13-45, an integer too long to convert, nesting too deep
+        reason = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise ConfigError(f"invalid config: {path}: not valid YAML: {reason}") from None
+    return validate_config({} if cfg is None else cfg)
 
 
 def config_hash(obj: Any) -> str:

@@ -1,5 +1,6 @@
 # Turn the validated config into targets and job parameters.
 import json
+import math
 
 PY = sys.executable
 RES = "results"
@@ -17,8 +18,15 @@ def scene_json(wildcards):
 
 
 def point_files(wildcards):
+    """One point file per scheme of the config and piston velocity of the scene."""
     ups = config["scenes"][wildcards.scene]["shock"]["u_p"]
-    return [f"{RES}/{wildcards.scene}/up{up_tag(u)}/piston.nc" for u in ups]
+    return [
+        f"{RES}/{wildcards.scene}/up{up_tag(u)}/{scheme}.nc"
+        for scheme in config["scenes"][wildcards.scene].get(
+            "schemes", config["schemes"]
+        )
+        for u in ups
+    ]
 
 
 def all_targets():
@@ -30,3 +38,119 @@ def all_targets():
             f"{RES}/figures/{scene}_D_up.png",
         ]
     return out
+
+
+# Cluster resources per job (SLURM profile: workflow/profiles/slurm), from the scene
+# size. A local run ignores mem_mb and runtime unless --resources caps them. Generous on
+# purpose: a job killed at its limit costs more than a slot held a little too long; each
+# retry (--retries) gets `attempt` times the first request.
+MD_BASE_MB = 1024  # Python + numba + xarray/netCDF: about 350 MB resident, measured
+# state ~0.2 kB + full Verlet list ~0.8 kB (int32 rows, rho* <= 1.5), x4 margin
+MD_BYTES_PER_ATOM = 4096
+MD_S_PER_ATOM_STEP = 1.0e-6  # 1-core kernel ~3e-7 s (FACTS.md), x3: sampling, I/O
+MD_STARTUP_MIN = 5  # imports, numba compile when its cache is cold, file writes
+REF_POLE_FACTOR, REF_MAX_ITER = 4, 10  # analysis.reference.reference_hugoniot defaults
+
+
+def _n_atoms(scene):
+    nx, ny, nz = scene["sample"]["cells"]
+    return 4 * nx * ny * nz  # FCC
+
+
+def _profile_bytes(scene):
+    """Profile history of one shock stage: samples x bins x 11 sums (float64)."""
+    s, sh = scene["sample"], scene["shock"]
+    length = s["cells"][0] * (4.0 / s["rho0"]) ** (1.0 / 3.0)
+    n_samples = sh["max_time"] / sh["dt"] / sh["sample_every"]
+    return n_samples * (length / sh["bin_width"] + 1) * 11 * 8
+
+
+def _atom_steps(scene, stage):
+    """Upper bound of atoms x steps of an MD stage."""
+    s, sh = scene["sample"], scene["shock"]
+    if stage == "prepare":
+        return _n_atoms(scene) * (s["equilibrate_time"] + s["pole_time"]) / s["dt"]
+    if stage in ("load", "piston"):  # each stage stops at shock.max_time
+        return _n_atoms(scene) * sh["max_time"] / sh["dt"]
+    # reference: the pole (REF_POLE_FACTOR x production), then NVT runs per compression
+    r = scene["reference"]
+    run = r["equilibrate_steps"] + r["production_steps"]
+    steps = r["equilibrate_steps"] + REF_POLE_FACTOR * r["production_steps"]
+    steps += REF_MAX_ITER * len(r["compressions"]) * run
+    return 4 * r["cells"] ** 3 * steps
+
+
+def md_mem_mb(stage):
+    """mem_mb of an MD stage ("prepare", "load", "piston", "reference")."""
+
+    def mem_mb(wildcards, attempt):
+        scene = config["scenes"][wildcards.scene]
+        if stage == "reference":
+            n, extra = 4 * scene["reference"]["cells"] ** 3, 0
+        else:
+            n, extra = _n_atoms(scene), _profile_bytes(scene) * (stage != "prepare")
+        # the profile history is held, then copied once into the dataset that is written
+        return attempt * int(MD_BASE_MB + (n * MD_BYTES_PER_ATOM + 2 * extra) / 2**20)
+
+    return mem_mb
+
+
+def md_runtime(stage):
+    """runtime [min] of an MD stage: atom-steps at the 1-core rate over the threads."""
+
+    def runtime(wildcards, threads, attempt):
+        steps = _atom_steps(config["scenes"][wildcards.scene], stage)
+        minutes = MD_STARTUP_MIN + steps * MD_S_PER_ATOM_STEP / threads / 60.0
+        return attempt * int(math.ceil(minutes))
+
+    return runtime
+
+
+def summary_runtime(wildcards, attempt):
+    """runtime [min] of aggregate / figures: a few seconds per 100 point files."""
+    return attempt * (5 + len(config["scenes"][wildcards.scene]["shock"]["u_p"]) // 100)
+
+
+# The dichotomy's data-dependent loop (workflow/rules/window.smk).
+def dichotomy_dir(w):
+    return f"{RES}/{w.scene}/up{w.up}/dichotomy"
+
+
+def dichotomy_pending(w, k):
+    """The u_out values iteration k proposed (read from its state file: a checkpoint)."""
+    state = checkpoints.dichotomy_state.get(scene=w.scene, up=w.up, k=k).output[0]
+    with open(state) as f:
+        return json.load(f)["pending"]
+
+
+def dichotomy_trials(w, k):
+    """The trial files run on iteration k's proposals."""
+    n = len(dichotomy_pending(w, k))
+    return [f"{dichotomy_dir(w)}/trial{k}_{i}.json" for i in range(n)]
+
+
+def dichotomy_state_inputs(w):
+    k = int(w.k)
+    if k == 0:
+        return {"window": f"{RES}/{w.scene}/up{w.up}/window.nc"}
+    return {
+        "window": f"{RES}/{w.scene}/up{w.up}/window.nc",
+        "previous": f"{dichotomy_dir(w)}/state{k - 1}.json",
+        "trials": dichotomy_trials(w, k - 1),
+    }
+
+
+def dichotomy_final(w):
+    """Walk the iterations until a state says done; its file and every trial so far."""
+    k, trials = 0, []
+    while True:
+        state = checkpoints.dichotomy_state.get(scene=w.scene, up=w.up, k=k).output[0]
+        with open(state) as f:
+            if json.load(f)["done"]:
+                return {
+                    "window": f"{RES}/{w.scene}/up{w.up}/window.nc",
+                    "state": state,
+                    "trials": trials,
+                }
+        trials += dichotomy_trials(w, k)
+        k += 1

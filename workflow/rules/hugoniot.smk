@@ -11,6 +11,10 @@ rule aggregate:
         f"{RES}/logs/{{scene}}/aggregate.log",
     conda:
         "../envs/hugomap.yaml"
+    threads: 1
+    resources:
+        mem_mb=2048,
+        runtime=summary_runtime,
     params:
         py=PY,
         config=lambda wildcards: json.dumps(config, sort_keys=True),
@@ -29,6 +33,10 @@ rule figures:
         f"{RES}/logs/{{scene}}/figures.log",
     conda:
         "../envs/hugomap.yaml"
+    threads: 1
+    resources:
+        mem_mb=2048,
+        runtime=summary_runtime,
     params:
         py=PY,
     shell:

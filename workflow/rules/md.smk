@@ -14,6 +14,9 @@ rule prepare_sample:
     conda:
         "../envs/hugomap.yaml"
     threads: config["threads"]
+    resources:
+        mem_mb=md_mem_mb("prepare"),
+        runtime=md_runtime("prepare"),
     params:
         py=PY,
         scene=scene_json,
@@ -32,6 +35,9 @@ rule load_to_target:
     conda:
         "../envs/hugomap.yaml"
     threads: config["threads"]
+    resources:
+        mem_mb=md_mem_mb("load"),
+        runtime=md_runtime("load"),
     params:
         py=PY,
         scene=scene_json,
@@ -51,6 +57,9 @@ rule piston_point:
     conda:
         "../envs/hugomap.yaml"
     threads: config["threads"]
+    resources:
+        mem_mb=md_mem_mb("piston"),
+        runtime=md_runtime("piston"),
     params:
         py=PY,
         scene=scene_json,
@@ -68,6 +77,9 @@ rule reference:
     conda:
         "../envs/hugomap.yaml"
     threads: 1
+    resources:
+        mem_mb=md_mem_mb("reference"),
+        runtime=md_runtime("reference"),
     params:
         py=PY,
         scene=scene_json,

@@ -13,6 +13,7 @@ import subprocess
 from collections.abc import Sequence
 from pathlib import Path
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -23,6 +24,7 @@ P_UNIT = "epsilon sigma^-3"
 POINT_VARS: dict[str, tuple[str, str]] = {
     "D": ("sigma tau^-1", "shock velocity relative to the upstream material"),
     "u_p_measured": ("sigma tau^-1", "measured particle-velocity jump across the front"),
+    "u_p_set": ("sigma tau^-1", "particle-velocity jump set by the window, u_out - u_in"),
     "rho": ("sigma^-3", "number density behind the front"),
     "V": ("sigma^3", "specific volume behind the front (per atom, m = 1)"),
     "P": (P_UNIT, "longitudinal stress behind the front, P_xx = -sigma_xx"),
@@ -149,6 +151,25 @@ def point_dataset(
     return ds
 
 
+def _read_scalars(path: str | Path, var_attrs: dict[str, dict]) -> tuple[dict, dict]:
+    """The 0-d variables of a point file and its global attributes, read with the file open
+    once (the front history is not read). Attributes of variables not yet in ``var_attrs``
+    are added to it."""
+    with netCDF4.Dataset(str(path)) as nc:
+        nc.set_auto_mask(False)
+        values = {}
+        for name, var in nc.variables.items():
+            if var.ndim:
+                continue
+            v = var.getValue()  # much cheaper than var[...] for a scalar
+            values[name] = v if isinstance(v, str) else v.item()
+            if name not in var_attrs:
+                var_attrs[name] = {
+                    a: var.getncattr(a) for a in var.ncattrs() if not a.startswith("_")
+                }
+        return values, {a: nc.getncattr(a) for a in nc.ncattrs()}
+
+
 def aggregate_points(
     paths: Sequence[str | Path],
     scheme: str,
@@ -156,40 +177,60 @@ def aggregate_points(
     config: dict,
     scene: str,
 ) -> xr.Dataset:
-    """Join point files (lazily, with dask) into one dataset with dims ``scheme`` × ``u_p``."""
+    """Join point files into one dataset with dims ``scheme`` × ``u_p``.
+
+    Each file is opened once, its scalars read and the file closed, so memory is the
+    aggregate itself (about 70 numbers per point) and one open file, for any number of
+    points. (``open_mfdataset`` was used before: beyond xarray's 128 cached file handles it
+    reopened a file for every variable of every point, 300 points took 8 minutes and
+    430 MB; a netCDF file of 0-d variables gains nothing from dask chunks.) A variable
+    missing from some files (``_err`` values of failed points, the pole of a point whose
+    loading failed) is NaN there; the pole is taken from the first point that has it.
+    """
     keep = [
         k for k in (*POINT_VARS, *(k + ERR_SUFFIX for k in POINT_VARS)) if k != "piston_velocity"
     ]
-    # The dimension u_p is the nominal piston velocity; the measured jump is u_p_measured.
-    ds = xr.open_mfdataset(
-        [str(p) for p in paths],
-        combine="nested",
-        concat_dim="u_p",
-        data_vars="all",
-        coords="minimal",
-        compat="override",
-        drop_variables=["history_t", "history_front", "history_stage"],
-        engine="netcdf4",
+    if not paths:
+        raise ValueError(f"scene {scene}: no point files to aggregate")
+    pole_names = [*POLE_VARS, *(k + ERR_SUFFIX for k in POLE_VARS)]
+    rows: list[dict] = []
+    var_attrs: dict[str, dict] = {}
+    first_attrs: dict = {}
+    for i, p in enumerate(paths):
+        values, gattrs = _read_scalars(p, var_attrs)
+        rows.append(values)
+        if i == 0:
+            first_attrs = gattrs
+    present = {k for r in rows for k in r}
+
+    def column(k: str, fill: object = np.nan) -> np.ndarray:
+        return np.array([r.get(k, fill) for r in rows])
+
+    up = column("piston_velocity").astype(float)
+    pts = xr.Dataset(
+        {k: ("u_p", column(k).astype(float), var_attrs[k]) for k in keep if k in present},
+        attrs=first_attrs,
     )
-    up = ds["piston_velocity"].values
-    pole = {
-        k: ds[k].isel(u_p=0) for k in (*POLE_VARS, *(k + ERR_SUFFIX for k in POLE_VARS)) if k in ds
-    }
-    pts = ds[[k for k in keep if k in ds] + ["converged"]]
-    # Strings are read per file: concatenating them lazily truncates to the first one's width.
-    texts = {"status": [], "diagnostic": []}
-    for p in paths:
-        with xr.open_dataset(p, engine="netcdf4") as one:
-            for k in texts:
-                texts[k].append(str(one[k].values))
-    for k, v in texts.items():
-        pts[k] = ("u_p", np.array(v, dtype=object), {"long_name": POINT_TEXT[k]})
+    pts["converged"] = (
+        "u_p",
+        column("converged", 0).astype(np.int8),
+        var_attrs.get("converged", {}),
+    )
+    # Strings as objects: a fixed-width array would truncate to the widest seen so far.
+    for k in ("status", "diagnostic"):
+        pts[k] = ("u_p", np.array([str(r.get(k, "")) for r in rows], dtype=object))
+        pts[k].attrs = {"long_name": POINT_TEXT[k]}
+    pole = {}
+    for k in pole_names:
+        found = [r[k] for r in rows if k in r and np.isfinite(r[k])]
+        if k in present:
+            pole[k] = xr.Variable((), found[0] if found else np.nan, var_attrs[k])
     pts = pts.assign_coords(
         u_p=("u_p", up, {"units": "sigma tau^-1", "long_name": "nominal piston velocity"})
     )
     out = pts.expand_dims(scheme=[scheme])
     for k, v in pole.items():
-        out[k] = v.drop_vars([c for c in v.coords])
+        out[k] = v
     if reference is not None:
         for name, var in reference.data_vars.items():
             out["ref_" + name] = var.rename({d: "ref_point" for d in var.dims})

@@ -47,7 +47,9 @@ class MDState:
     time [τ]; step; impulse (2,) x-momentum given by the left/right wall [m σ/τ];
     epoch_time [τ], epoch_step: the time and step at which the current Δt was set, so that
     time = epoch_time + (step − epoch_step) Δt is computed the same way however a run is split
-    (a float sum of chunks would not be bit-for-bit, and the wall positions depend on it).
+    (a float sum of chunks would not be bit-for-bit, and the wall positions depend on it);
+    ref_velocity [σ/τ], ref_shift [σ]: the uniform x drift discounted from the list-rebuild
+    displacement test, and that drift since the last build (``integrate.run_steps``).
     """
 
     x: np.ndarray
@@ -63,6 +65,8 @@ class MDState:
     impulse: np.ndarray = field(default_factory=lambda: np.zeros(2))
     epoch_time: float = 0.0
     epoch_step: int = 0
+    ref_velocity: float = 0.0
+    ref_shift: float = 0.0
 
     def __post_init__(self) -> None:
         n = self.x.shape[0]
@@ -140,6 +144,8 @@ class MDSimulation:
     def _build_list(self, sort: bool) -> None:
         """(Re)build the list; ``sort=False`` rebuilds exactly the list made at x_ref."""
         s = self.state
+        if sort:
+            s.ref_shift = 0.0
         while True:
             if sort:
                 need = ig.rebuild(
@@ -215,13 +221,15 @@ class MDSimulation:
         done_total = 0
         thermo, r1, chi, _ = self._thermo_numbers(n_steps)
         counters = np.zeros(1, dtype=np.int64)
+        ref = np.array([s.ref_velocity, s.ref_shift])
         while done_total < n_steps:
             done, code = ig.run_steps(
                 n_steps - done_total, s.x, s.v, s.f, s.ids, s.x_ref, s.L, s.periodic, s.walls0,
                 s.epoch_time, s.step - s.epoch_step, self.dt, self.lj.rc**2, self.lj.rlist**2, (0.5 * self.lj.skin) ** 2,
                 self.nc, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, s.impulse,
-                thermo, r1[done_total:], chi[done_total:], counters,
+                thermo, r1[done_total:], chi[done_total:], counters, ref,
             )  # fmt: skip
+            s.ref_shift = float(ref[1])
             s.step += done
             self._sync_time()
             done_total += done
@@ -369,6 +377,8 @@ class MDSimulation:
             step=int(s.step),
             epoch_time=float(s.epoch_time),
             epoch_step=int(s.epoch_step),
+            ref_velocity=float(s.ref_velocity),
+            ref_shift=float(s.ref_shift),
             dt=self.dt,
             lj=json.dumps({"rc": self.lj.rc, "shift": self.lj.shift, "skin": self.lj.skin}),
             thermostat=json.dumps(
@@ -404,6 +414,8 @@ class MDSimulation:
             step=int(ds.attrs["step"]), impulse=ds["impulse"].values.copy(),
             epoch_time=float(ds.attrs.get("epoch_time", ds.attrs["time"])),
             epoch_step=int(ds.attrs.get("epoch_step", ds.attrs["step"])),
+            ref_velocity=float(ds.attrs.get("ref_velocity", 0.0)),
+            ref_shift=float(ds.attrs.get("ref_shift", 0.0)),
         )  # fmt: skip
         lj = LJParams(**json.loads(ds.attrs["lj"]))
         th = json.loads(ds.attrs["thermostat"])

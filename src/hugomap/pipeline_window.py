@@ -1,0 +1,351 @@
+"""Window stages of the workflow: the window checkpoint, AMW and MW points, and the dichotomy.
+
+Every stage starts from the piston's "load to target" checkpoint, through one window
+checkpoint per (scene, u_p) (``window_start``), and writes a point file in the same format as
+the piston's (``io.dataset.point_dataset``) with ``scheme`` set, plus the control history and
+the steady profile in the window frame. Reduced LJ units (σ, τ, ε; m = 1).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .analysis.shock import analyse_piston, front_position, region_state
+from .analysis.stats import line_fit
+from .io.atomic import write_json, write_netcdf
+from .io.dataset import POLE_VARS, point_dataset, scalar_vars
+from .md.profiles import fields_from_sums
+from .md.simulation import MDSimulation, SolverUnstable
+from .md.window import MDWindow, WindowError, make_reservoir
+from .pipeline import _cpu, _history_from, _pole_from
+from .window import dichotomy as dich
+from .window.methods import ControlHistory, OmegaSignal, amw, fixed_run, mw
+
+log = logging.getLogger("hugomap")
+
+
+def _failed(out, scheme, scene, status, diagnostic, values=None) -> Path:
+    log.error("%s: %s", status, diagnostic)
+    ds = point_dataset(
+        values or {}, {}, None, scheme, scene.get("name", ""), status, diagnostic, scene
+    )
+    return write_netcdf(ds, out)
+
+
+def window_start(
+    loaded: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike
+) -> Path:
+    """Cut the window out of the loading checkpoint and save it (the branching state).
+
+    D is first guessed from the loading stage's front speed (line fit over its second half),
+    and the window runs ``window.settle_time`` at that guess before it is saved;
+    ω is normalised by the pole (upstream: ρ0, P0) and the shocked state measured in the new
+    window (the slab between the outflow edge and the front, ``shock.gap`` clear of both).
+    """
+    with xr.open_dataset(loaded, engine="netcdf4") as ds:
+        ds.load()
+    attrs = {"stage": "window", "u_p": u_p, "scene_config": json.dumps(scene)}
+    if ds.attrs.get("status", "ok") != "ok":
+        return write_netcdf(
+            xr.Dataset(attrs={**attrs, "status": ds.attrs["status"],
+                              "diagnostic": ds.attrs.get("diagnostic", "")}), out,
+        )  # fmt: skip
+    w, sh, s = scene["window"], scene["shock"], scene["sample"]
+    pole = _pole_from(ds)
+    sim = MDSimulation.from_dataset(ds)
+    h = _history_from(ds).arrays()
+    n = h["t"].size
+    a, *_ = line_fit(h["t"][n // 2 :], h["front"][n // 2 :])
+    D_guess = float(a + u_p)
+    res = make_reservoir(
+        (s["cells"][1], s["cells"][2]), s["rho0"], s["T0"], sim.lj, sim.dt, s["seed"] + 7919,
+        w["reservoir_equilibrate_time"], s["thermostat_tau"],
+    )  # fmt: skip
+    try:
+        win = MDWindow.from_piston(
+            sim, res, float(h["front"][-1]), u_p, D_guess, w["length"], w["front_fraction"],
+            w["ghost_width"], w["cut_every"], w["sync_steps"],
+            crystal=scene["phase"] == "crystal", lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0),
+        )  # fmt: skip
+    except WindowError as exc:
+        return write_netcdf(
+            xr.Dataset(attrs={**attrs, "status": exc.status, "diagnostic": exc.diagnostic}), out
+        )
+    try:
+        # Let the set-up transient (new boundaries, the first seam) pass at the guessed D:
+        # every scheme branches from this settled state.
+        win.advance(int(round(w["settle_time"] / win.dt)))
+    except (SolverUnstable, WindowError) as exc:
+        return write_netcdf(
+            xr.Dataset(attrs={**attrs, "status": exc.status, "diagnostic": exc.diagnostic}), out
+        )
+    g, bw = win.geom, sh["bin_width"]
+    sums = win.profile_sums(bw)
+    edges = np.arange(sums.shape[0] + 1) * bw
+    ux = fields_from_sums(sums, win.area * bw)["ux"]
+    x_f = front_position(ux, sums[:, 0], edges, g.x_lo, g.x_hi)
+    if not np.isfinite(x_f):
+        x_f = g.x_lo + w["front_fraction"] * g.length
+    shocked = region_state(sums, edges, g.x_lo + 0.5 * sh["gap"], x_f - 0.5 * sh["gap"], win.area)
+    upstream = {"n": pole["rho0"], "Pxx": pole["P0"]}
+    sig = OmegaSignal.from_states(w["omega"], g.length, win.area, upstream, shocked, bw)
+    extra = xr.Dataset(scalar_vars(pole, POLE_VARS))
+    return win.save(
+        out,
+        extra=extra,
+        attrs={
+            **attrs, "status": "ok", "D_guess": D_guess,
+            "omega_signal": json.dumps({"kind": sig.kind, "q_up": sig.q_up, "q_sh": sig.q_sh,
+                                        "bin_width": sig.bin_width}),
+        },
+    )  # fmt: skip
+
+
+def _open(path: str | os.PathLike) -> tuple[MDWindow, OmegaSignal, dict, xr.Dataset]:
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        ds.load()
+    if ds.attrs.get("status", "ok") != "ok":
+        raise WindowError(ds.attrs["status"], ds.attrs.get("diagnostic", ""))
+    win = MDWindow.from_dataset(ds)
+    sig = OmegaSignal(**json.loads(ds.attrs["omega_signal"]))
+    return win, sig, _pole_from(ds), ds
+
+
+def steady_state(win: MDWindow, scene: dict, pole: dict, duration: float) -> tuple[dict, dict]:
+    """Average the steady wave in the window frame for ``duration`` [τ] (the frame held).
+
+    Each sample: the profile sums and the front (velocity change point inside the window);
+    then ``analysis.shock.analyse_piston`` with the window edges as the boundaries, the
+    upstream velocity u_in and the downstream u_out known exactly: D = L dω/dt-like front
+    drift − u_in, u_p = u_out − u_in. Returns the point values and the profile history."""
+    sh, w = scene["shock"], scene["window"]
+    bw, every = sh["bin_width"], w["sample_every"]
+    g = win.geom
+    n = max(16, int(round(duration / (every * win.dt))))
+    t, front, sums_all = [], [], []
+    for _ in range(n):
+        win.advance(every)
+        sums = win.profile_sums(bw)
+        edges = np.arange(sums.shape[0] + 1) * bw
+        ux = fields_from_sums(sums, win.area * bw)["ux"]
+        t.append(win.time)
+        front.append(front_position(ux, sums[:, 0], edges, g.x_lo, g.x_hi))
+        sums_all.append(sums)
+    h = {
+        "t": np.asarray(t), "front": np.asarray(front), "stage": np.ones(n, dtype=np.int8),
+        "x_left": np.full(n, g.x_lo), "x_right": np.full(n, g.x_hi), "sums": np.asarray(sums_all),
+    }  # fmt: skip
+    r = analyse_piston(
+        h, pole, win.area, bw, sh["gap"], residual_tol=sh["residual_tol"],
+        avg_length=sh["avg_length"], u_upstream=win.u_in, u_piston=win.u_out,
+    )  # fmt: skip
+    # u_p = u_out − u_in is what the boundaries impose; u_p_measured (u_s − u_a) checks it.
+    r["u_p_set"] = r.pop("u_p")
+    r.pop("u_p_err")
+    return r, h
+
+
+def _profile_vars(h: dict, bw: float, area: float) -> dict:
+    """The mean steady profile along the window (ρ, u, P_xx, T per bin), window frame."""
+    mean = np.asarray(h["sums"]).mean(axis=0)
+    f = fields_from_sums(mean, area * bw)
+    x = (np.arange(mean.shape[0]) + 0.5) * bw
+    units = {
+        "n": "sigma^-3",
+        "ux": "sigma tau^-1",
+        "Pxx": "epsilon sigma^-3",
+        "T": "epsilon k_B^-1",
+    }
+    out = {"profile_x": ("bin", x, {"units": "sigma", "long_name": "bin centre (window frame)"})}
+    for k, u in units.items():
+        out["profile_" + k] = ("bin", f[k], {"units": u, "long_name": f"steady profile: {k}"})
+    return out
+
+
+def _control_vars(c: ControlHistory) -> dict:
+    a = c.arrays()
+    names = {
+        "t": ("tau", "end of averaging window k"),
+        "a": ("tau^-1", "slope a_k of omega(t) = a_k t + b_k"),
+        "a_err": ("tau^-1", "standard error of a_k"),
+        "omega": ("1", "mean omega over window k"),
+        "u_in": ("sigma tau^-1", "inflow velocity (window frame)"),
+        "u_out": ("sigma tau^-1", "outflow velocity (window frame)"),
+        "du": ("sigma tau^-1", "correction applied after window k"),
+    }
+    out = {f"control_{k}": ("window_k", a[k], {"units": u, "long_name": ln})
+           for k, (u, ln) in names.items()}  # fmt: skip
+    out["omega_t"] = ("omega_sample", a["samples_t"], {"units": "tau", "long_name": "time"})
+    out["omega_value"] = ("omega_sample", a["samples_omega"], {"units": "1", "long_name": "omega"})
+    return out
+
+
+def _finish_point(
+    out, scheme: str, scene: dict, u_p: float, pole: dict, win: MDWindow, values: dict,
+    h: dict | None, control: ControlHistory | None, status: str, diagnostic: str,
+    t0: float, c0: float, step0: int,
+) -> Path:  # fmt: skip
+    values = dict(values, piston_velocity=u_p)
+    values["wall_s"] = time.perf_counter() - t0
+    values["cpu_s"] = _cpu() - c0
+    values["atom_steps"] = float(win.n_particles * (win.sim.state.step - step0))
+    hist = None if h is None else {k: h[k] for k in ("t", "front", "stage")}
+    ds = point_dataset(values, pole, hist, scheme, scene.get("name", ""), status, diagnostic,
+                       scene)  # fmt: skip
+    extra = {}
+    if h is not None:
+        extra.update(_profile_vars(h, scene["shock"]["bin_width"], win.area))
+    if control is not None and control.t:
+        extra.update(_control_vars(control))
+    ds = ds.assign(extra)
+    ds.attrs.update(u_in=win.u_in, u_out=win.u_out, window_length=win.geom.length)
+    return write_netcdf(ds, out)
+
+
+def control_point(
+    window0: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike, scheme: str
+) -> Path:
+    """An AMW or MW point: control until steady, then average the steady state."""
+    t0, c0 = time.perf_counter(), _cpu()
+    try:
+        win, sig, pole, _ = _open(window0)
+    except WindowError as exc:
+        return _failed(out, scheme, scene, exc.status, exc.diagnostic, {"piston_velocity": u_p})
+    w = scene["window"]
+    step0 = win.sim.state.step
+    common = dict(
+        window_time=w["window_time"], calm_windows=w["calm_windows"],
+        max_windows=w["max_windows"], every=w["sample_every"], z=w["z"],
+    )  # fmt: skip
+    try:
+        if scheme == "amw":
+            result, hist = amw(win, sig, beta=w["amw"]["beta"], **common)
+        else:
+            result, hist = mw(
+                win, sig, gain_rate=w["mw"]["gain_rate"],
+                gain_position=w["mw"]["gain_position"], target=w["front_fraction"], **common,
+            )  # fmt: skip
+        if not result.converged:
+            return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, hist,
+                                 result.status, result.diagnostic, t0, c0, step0)  # fmt: skip
+        values, h = steady_state(win, scene, pole, w["average_time"])
+    except (SolverUnstable, WindowError) as exc:
+        return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, None, exc.status,
+                             exc.diagnostic, t0, c0, step0)  # fmt: skip
+    status = str(values["status"])
+    diagnostic = "" if status == "ok" else _residual_text(values)
+    return _finish_point(out, scheme, scene, u_p, pole, win, values, h, hist, status,
+                         diagnostic, t0, c0, step0)  # fmt: skip
+
+
+def _residual_text(values: dict) -> str:
+    return "jump residuals: " + ", ".join(
+        f"{k} {values['residual_' + k]:+.3%}" for k in ("mass", "momentum", "energy")
+    )
+
+
+def _dich_params(scene: dict) -> dich.DichotomyParams:
+    d = scene["window"]["dichotomy"]
+    return dich.DichotomyParams(
+        half_width=d["half_width"], growth=d["growth"], max_expansions=d["max_expansions"],
+        max_iterations=d["max_iterations"], tolerance=d["tolerance"],
+    )  # fmt: skip
+
+
+def dichotomy_state(
+    window0: str | os.PathLike, scene: dict, k: int, previous: str | None, trials: list[str],
+    out: str | os.PathLike,
+) -> Path:  # fmt: skip
+    """Iteration k of the dichotomy's loop state (``window.dichotomy``): k = 0 proposes the
+    bracket; k ≥ 1 folds in the trials run on iteration k − 1's proposals."""
+    p = _dich_params(scene)
+    if k == 0:
+        with xr.open_dataset(window0, engine="netcdf4") as ds:
+            status = ds.attrs.get("status", "ok")
+            if status != "ok":
+                s = dich.initial_state(float("nan"), p)
+                s.update(done=True, status=status, reason=ds.attrs.get("diagnostic", ""),
+                         pending=[])  # fmt: skip
+                return write_json(s, out)
+            u_out0 = json.loads(ds.attrs["window_state"])["u_out"]
+        return write_json(dich.initial_state(u_out0, p), out)
+    prev = json.loads(Path(previous).read_text())
+    new = [json.loads(Path(f).read_text()) for f in trials]
+    return write_json(dich.update(prev, new, p), out)
+
+
+def dichotomy_trial(
+    window0: str | os.PathLike, scene: dict, state: str, index: int, out: str | os.PathLike
+) -> Path:
+    """One trial: from the window checkpoint at u_out = state.pending[index] (u_p held),
+    run ``dichotomy.trial_time`` and fit ⟨dω/dt⟩."""
+    t0, c0 = time.perf_counter(), _cpu()
+    u_out = float(json.loads(Path(state).read_text())["pending"][index])
+    win, sig, _, _ = _open(window0)
+    win.galilean_shift(u_out - win.u_out)
+    d = scene["window"]["dichotomy"]
+    step0 = win.sim.state.step
+    try:
+        r = fixed_run(win, sig, d["trial_time"], scene["window"]["sample_every"])
+    except (SolverUnstable, WindowError) as exc:
+        # An unstable trial has no slope: take its sign from where the front was heading.
+        r = {"u_out": u_out, "slope": float("nan"), "status": exc.status,
+             "diagnostic": exc.diagnostic}  # fmt: skip
+    r = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in r.items()}
+    r.update(wall_s=time.perf_counter() - t0, cpu_s=_cpu() - c0,
+             atom_steps=float(win.n_particles * (win.sim.state.step - step0)))  # fmt: skip
+    return write_json(r, out)
+
+
+def dichotomy_point(
+    window0: str | os.PathLike, scene: dict, u_p: float, state: str, trials: list[str],
+    out: str | os.PathLike,
+) -> Path:  # fmt: skip
+    """The final refinement: at the root u_out of the bisection, a longer steady average."""
+    t0, c0 = time.perf_counter(), _cpu()
+    s = json.loads(Path(state).read_text())
+    scheme = "dichotomy"
+    prior = [json.loads(Path(f).read_text()) for f in trials]
+    cost = {k: sum(float(t.get(k, 0.0)) for t in prior) for k in ("wall_s", "cpu_s", "atom_steps")}
+    if s["status"] != "ok":
+        return _failed(out, scheme, scene, s["status"], s["reason"],
+                       {"piston_velocity": u_p, **cost})  # fmt: skip
+    try:
+        win, _, pole, _ = _open(window0)
+    except WindowError as exc:
+        return _failed(out, scheme, scene, exc.status, exc.diagnostic, {"piston_velocity": u_p})
+    win.galilean_shift(float(s["u_out"]) - win.u_out)
+    step0 = win.sim.state.step
+    try:
+        values, h = steady_state(win, scene, pole, scene["window"]["dichotomy"]["final_time"])
+    except (SolverUnstable, WindowError) as exc:
+        return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, None, exc.status,
+                             exc.diagnostic, t0, c0, step0)  # fmt: skip
+    status = str(values["status"])
+    diagnostic = "" if status == "ok" else _residual_text(values)
+    path = _finish_point(out, scheme, scene, u_p, pole, win, values, h, None, status,
+                         diagnostic, t0, c0, step0)  # fmt: skip
+    # The bisection's trials are part of the point's cost.
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        ds.load()
+    for k in ("wall_s", "cpu_s", "atom_steps"):
+        ds[k] = ds[k] + cost[k]
+    bis = np.array([[t["u_out"], t.get("slope", np.nan)] for t in s["trials"]], dtype=float)
+    ds["dichotomy_u_out"] = (
+        "trial",
+        bis[:, 0],
+        {"units": "sigma tau^-1", "long_name": "trial u_out"},
+    )
+    ds["dichotomy_slope"] = (
+        "trial",
+        bis[:, 1],
+        {"units": "tau^-1", "long_name": "trial <domega/dt>"},
+    )
+    return write_netcdf(ds, out)
