@@ -118,13 +118,16 @@ def _open(path: str | os.PathLike) -> tuple[MDWindow, OmegaSignal, dict, xr.Data
     return win, sig, _pole_from(ds), ds
 
 
-def steady_state(win: MDWindow, scene: dict, pole: dict, duration: float) -> tuple[dict, dict]:
+def steady_state(
+    win: MDWindow, scene: dict, pole: dict, duration: float
+) -> tuple[dict, dict, dict]:
     """Average the steady wave in the window frame for ``duration`` [τ] (the frame held).
 
     Each sample: the profile sums and the front (velocity change point inside the window);
     then ``analysis.shock.analyse_piston`` with the window edges as the boundaries, the
     upstream velocity u_in and the downstream u_out known exactly: D = L dω/dt-like front
-    drift − u_in, u_p = u_out − u_in. Returns the point values and the profile history."""
+    drift − u_in, u_p = u_out − u_in. Returns the point values, the profile history and the
+    upstream state (measured ahead of the front) the point refers to."""
     sh, w = scene["shock"], scene["window"]
     bw, every = sh["bin_width"], w["sample_every"]
     g = win.geom
@@ -142,14 +145,23 @@ def steady_state(win: MDWindow, scene: dict, pole: dict, duration: float) -> tup
         "t": np.asarray(t), "front": np.asarray(front), "stage": np.ones(n, dtype=np.int8),
         "x_left": np.full(n, g.x_lo), "x_right": np.full(n, g.x_hi), "sums": np.asarray(sums_all),
     }  # fmt: skip
-    r = analyse_piston(
-        h, pole, win.area, bw, sh["gap"], residual_tol=sh["residual_tol"],
-        avg_length=sh["avg_length"], u_upstream=win.u_in, u_piston=win.u_out,
-    )  # fmt: skip
+    args = (win.area, bw, sh["gap"])
+    kw = dict(residual_tol=sh["residual_tol"], avg_length=sh["avg_length"],
+              u_upstream=win.u_in, u_piston=win.u_out)  # fmt: skip
+    # The material ahead of the front comes from the inflow reservoir, not from the piston
+    # sample whose pole was measured: the two differ by the canonical fluctuation of a
+    # finite sample's energy (about 0.03 epsilon per atom here, 1 % of E − E0). So the jump
+    # conditions are taken from the state measured just ahead of the front.
+    first = analyse_piston(h, pole, *args, **kw)
+    upstream = {"rho0": first["ahead_rho"], "P0": first["ahead_P"], "E0": first["ahead_E"]}
+    upstream.update({k + "_err": first[f"ahead_{v}_err"] for k, v in
+                     (("rho0", "rho"), ("P0", "P"), ("E0", "E"))})  # fmt: skip
+    upstream.update({k: pole[k] for k in ("T0", "T0_err", "Pyy0", "Pyy0_err") if k in pole})
+    r = analyse_piston(h, upstream, *args, **kw)
     # u_p = u_out − u_in is what the boundaries impose; u_p_measured (u_s − u_a) checks it.
     r["u_p_set"] = r.pop("u_p")
     r.pop("u_p_err")
-    return r, h
+    return r, h, upstream
 
 
 def _profile_vars(h: dict, bw: float, area: float) -> dict:
@@ -235,7 +247,7 @@ def control_point(
         if not result.converged:
             return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, hist,
                                  result.status, result.diagnostic, t0, c0, step0)  # fmt: skip
-        values, h = steady_state(win, scene, pole, w["average_time"])
+        values, h, pole = steady_state(win, scene, pole, w["average_time"])
     except (SolverUnstable, WindowError) as exc:
         return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, None, exc.status,
                              exc.diagnostic, t0, c0, step0)  # fmt: skip
@@ -324,7 +336,7 @@ def dichotomy_point(
     win.galilean_shift(float(s["u_out"]) - win.u_out)
     step0 = win.sim.state.step
     try:
-        values, h = steady_state(win, scene, pole, scene["window"]["dichotomy"]["final_time"])
+        values, h, pole = steady_state(win, scene, pole, scene["window"]["dichotomy"]["final_time"])
     except (SolverUnstable, WindowError) as exc:
         return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, None, exc.status,
                              exc.diagnostic, t0, c0, step0)  # fmt: skip

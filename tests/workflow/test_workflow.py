@@ -7,6 +7,7 @@ tests/physics; here only that the chain runs and writes what it should.
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -33,7 +34,7 @@ def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
     agg = tmp_path / "results" / "hugoniot" / "tiny.nc"
     with xr.open_mfdataset([agg], engine="netcdf4", combine="by_coords") as ds:  # dask-backed
         assert ds["P"].dims == ("scheme", "u_p")
-        assert list(ds["scheme"].values) == ["piston"]
+        assert list(ds["scheme"].values) == ["piston", "amw", "dichotomy"]
         assert list(ds["u_p"].values) == [1.5, 2.5]
         for name in ("D", "u_p_measured", "rho", "V", "P", "P_rh", "E_minus_E0", "T",
                      "residual_mass", "residual_momentum", "residual_energy", "wall_s",
@@ -43,8 +44,27 @@ def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
             assert ds[name].attrs.get("long_name"), f"{name} has no long_name"
         for attr in ("config_json", "config_hash", "hugomap_version", "git_commit"):
             assert ds.attrs.get(attr), attr
-        assert set(ds["status"].values.ravel()) <= {"ok", "not_converged"}
-        assert (ds["P"] > ds["P0"]).all()  # a shock compresses
+        piston = ds.sel({"scheme": "piston"})
+        assert set(piston["status"].values) <= {"ok", "not_converged"}
+        assert (piston["P"] > ds["P0"]).all()  # a shock compresses
+        # The window schemes on this tiny scene may fail, but only with a named reason.
+        known = {"ok", "not_converged", "never_steady", "front_left_window",
+                 "bracket_not_found", "max_iterations", "sample_too_short"}  # fmt: skip
+        for s in ("amw", "dichotomy"):
+            st = ds.sel({"scheme": s})
+            for status, diag, P in zip(st["status"].values, st["diagnostic"].values,
+                                       st["P"].values, strict=True):  # fmt: skip
+                assert status in known, status
+                assert status in ("ok", "not_converged") or diag, status
+                if status in ("ok", "not_converged"):
+                    assert P > float(ds["P0"])
+    # The dichotomy's loop: states 0..k, the last one done, with its trials on disk.
+    for up in ("1.5", "2.5"):
+        d = tmp_path / "results" / "tiny" / f"up{up}" / "dichotomy"
+        states = sorted(d.glob("state*.json"), key=lambda p: int(p.stem[5:]))
+        last = json.loads(states[-1].read_text())
+        assert last["done"] and last["k"] == len(states) - 1
+        assert len(list(d.glob("trial*.json"))) == len(last["trials"])
     for png in ("tiny_PV.png", "tiny_D_up.png"):
         assert (tmp_path / "results" / "figures" / png).stat().st_size > 10_000
     # A second run has nothing to do: every stage is a file.
