@@ -69,6 +69,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("aggregate")
     p.add_argument("--pv", required=True)
     p.add_argument("--dup", required=True)
+    p = sub.add_parser("history", help="history figure of one window point")
+    p.add_argument("point")
+    p.add_argument("--out", required=True)
     p = sub.add_parser("check-config", help="validate a YAML config")
     p.add_argument("config")
     p = sub.add_parser(
@@ -128,6 +131,10 @@ def main(argv: list[str] | None = None) -> int:
         from .figures import hugoniot_figures
 
         hugoniot_figures(args.aggregate, args.pv, args.dup)
+    elif args.cmd == "history":
+        from .figures import window_history_figure
+
+        window_history_figure(args.point, args.out)
     elif args.cmd == "check-config":
         from .config import ConfigError, load_config
 

@@ -29,6 +29,12 @@ def hugoniot_figures(
             ok = d["converged"].values.astype(bool)
             x, y = d[xv].values, d[yv].values
             xe, ye = d[xv + "_err"].values, d[yv + "_err"].values
+            if xv == "u_p_measured":
+                # u_p is exact: the piston's speed (the u_p coordinate), or u_out − u_in set
+                # by a window; the measured jump is a check, a few % low from its slabs.
+                u_set = d["u_p_set"].values if "u_p_set" in d else np.full(x.shape, np.nan)
+                x = np.where(np.isfinite(u_set), u_set, d["u_p"].values)
+                xe = np.zeros_like(x)
             ax.errorbar(x[ok], y[ok], xerr=xe[ok], yerr=ye[ok], fmt="o", label=f"{sch} (MD)")
             if (~ok).any():
                 ax.plot(x[~ok], y[~ok], "o", mfc="none", mec="gray", label=f"{sch}, not converged")
@@ -52,3 +58,43 @@ def hugoniot_figures(
         fig.tight_layout()
         fig.savefig(out)
         plt.close(fig)
+
+
+def window_history_figure(point: str | os.PathLike, out: str | os.PathLike) -> None:
+    """History of one window point: ω(t), the slopes a_k, u_in/u_out and the D estimate
+    −u_in + L a_k against time (AMW, MW); the trial sequence u_out → ⟨dω/dt⟩ (dichotomy)."""
+    with xr.open_dataset(point, engine="netcdf4") as ds:
+        ds = ds.load()
+    title = f"{ds.attrs.get('scene', '')} {ds.attrs.get('scheme', '')}: {ds['status'].values}"
+    fig, axes = plt.subplots(3, 1, figsize=(5.5, 7.5), dpi=110, sharex=False)
+    if "omega_t" in ds:
+        axes[0].plot(ds["omega_t"], ds["omega_value"], ".", ms=2)
+        axes[0].set_ylabel("ω = (x_f − x_lo)/L")
+        axes[0].set_xlabel("t [τ]")
+    if "control_t" in ds:
+        t = ds["control_t"].values
+        axes[1].errorbar(t, ds["control_a"], yerr=ds["control_a_err"], fmt="o")
+        axes[1].axhline(0.0, color="k", lw=0.8)
+        axes[1].set_ylabel("a_k [1/τ]")
+        L = float(ds.attrs.get("window_length", np.nan))
+        axes[2].plot(t, -ds["control_u_in"], "o-", label="D estimate −u_in (frame)")
+        axes[2].plot(t, -ds["control_u_in"] + L * ds["control_a"], "x", label="−u_in + L a_k")
+        axes[2].plot(t, ds["control_u_out"] - ds["control_u_in"], "s-", label="u_p = u_out − u_in")
+        axes[2].set_xlabel("t [τ]")
+        axes[2].set_ylabel("velocity [σ/τ]")
+        axes[2].legend(fontsize=7)
+    if "dichotomy_u_out" in ds:
+        u, a = ds["dichotomy_u_out"].values, ds["dichotomy_slope"].values
+        axes[1].plot(u, a, "o")
+        for i, (ui, ai) in enumerate(zip(u, a, strict=True)):
+            axes[1].annotate(str(i), (ui, ai), fontsize=7)
+        axes[1].axhline(0.0, color="k", lw=0.8)
+        axes[1].set_xlabel("trial u_out [σ/τ] (numbers: order)")
+        axes[1].set_ylabel("⟨dω/dt⟩ [1/τ]")
+        axes[2].plot(np.arange(u.size), u, "o-")
+        axes[2].set_xlabel("trial")
+        axes[2].set_ylabel("u_out [σ/τ]")
+    axes[0].set_title(title)
+    fig.tight_layout()
+    fig.savefig(out)
+    plt.close(fig)

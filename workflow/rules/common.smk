@@ -37,6 +37,13 @@ def all_targets():
             f"{RES}/figures/{scene}_PV.png",
             f"{RES}/figures/{scene}_D_up.png",
         ]
+        schemes = config["scenes"][scene].get("schemes", config["schemes"])
+        out += [
+            f"{RES}/figures/{scene}/up{up_tag(u)}_{scheme}_history.png"
+            for scheme in schemes
+            if scheme != "piston"
+            for u in config["scenes"][scene]["shock"]["u_p"]
+        ]
     return out
 
 

@@ -41,3 +41,21 @@ rule figures:
         py=PY,
     shell:
         "{params.py} -m hugomap figures {input} --pv {output.pv} --dup {output.dup} > {log} 2>&1"
+
+
+rule history_figure:
+    input:
+        f"{RES}/{{scene}}/up{{up}}/{{scheme}}.nc",
+    output:
+        f"{RES}/figures/{{scene}}/up{{up}}_{{scheme}}_history.png",
+    log:
+        f"{RES}/logs/{{scene}}/up{{up}}/{{scheme}}_history.log",
+    wildcard_constraints:
+        scheme="amw|mw|dichotomy",
+    conda:
+        "../envs/hugomap.yaml"
+    threads: 1
+    params:
+        py=PY,
+    shell:
+        "{params.py} -m hugomap history {input} --out {output} > {log} 2>&1"
