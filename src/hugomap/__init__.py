@@ -17,7 +17,11 @@ def _numba_cache_dir() -> str:
     for f in sorted(Path(__file__).parent.rglob("*.py")):
         h.update(f.read_bytes())
     base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
-    return str(base / "hugomap" / f"numba-{h.hexdigest()[:16]}")
+    # One folder per thread count too: processes with different NUMBA_NUM_THREADS (a 1-thread
+    # Snakemake job beside a 2-thread pytest) compiling at once wrote entries with the same
+    # file names for different code into one folder, and a later load segfaulted.
+    threads = os.environ.get("NUMBA_NUM_THREADS", str(os.cpu_count() or 1))
+    return str(base / "hugomap" / f"numba-{h.hexdigest()[:16]}-t{threads}")
 
 
 # A user's own NUMBA_CACHE_DIR wins. numba reads the variable when it is first imported; if

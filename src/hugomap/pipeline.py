@@ -23,7 +23,13 @@ from .io.atomic import write_netcdf
 from .io.dataset import POLE_VARS, aggregate_points, point_dataset, scalar_vars
 from .md.potential import LJParams
 from .md.sample import fcc_state
-from .md.simulation import MDSimulation, SolverUnstable
+from .md.simulation import (
+    CheckpointError,
+    MDSimulation,
+    SolverUnstable,
+    read_checkpoint,
+    verify_checkpoint,
+)
 from .window.piston import History, PistonParams, StageFailed, drive, load_to_target, start_piston
 
 log = logging.getLogger("hugomap")
@@ -150,6 +156,71 @@ def load_to_target_stage(
     return sim.save(out, extra=extra, attrs={**attrs, "status": "ok", "cost": json.dumps(cost)})
 
 
+def save_partial(
+    sim: MDSimulation,
+    h: History,
+    pole: dict[str, float],
+    cost: dict[str, float],
+    loaded: xr.Dataset,
+    part: str | os.PathLike,
+) -> Path:
+    """Write the periodic checkpoint ``part`` of a running piston point: the state, its
+    history and pole, the cost so far, and the checksum of the loading checkpoint it descends
+    from (``parent_checksum``: a partial checkpoint left by a run from another loading
+    checkpoint, e.g. before a config change, is not resumed)."""
+    extra = xr.merge([_history_extra(h), xr.Dataset(scalar_vars(pole, POLE_VARS))])
+    attrs = {
+        "stage": "drive",
+        "status": "ok",
+        "cost": json.dumps(cost),
+        "parent_checksum": str(loaded.attrs.get("checksum", "")),
+    }
+    return sim.save(part, extra=extra, attrs=attrs)
+
+
+STALE_TMP_S = 60.0  # a temporary file not written to for this long was left by a killed write
+
+
+def _remove_stale_temporaries(out: Path) -> None:
+    """Remove the temporary files (``io.atomic``) of ``out`` and of its partial checkpoint
+    that a killed write left behind; one written to in the last ``STALE_TMP_S`` seconds may
+    belong to a write in progress (a second sweep in the same folder) and is kept."""
+    now = time.time()
+    for tmp in out.parent.glob(f".{out.name}.*.tmp"):
+        try:
+            if now - tmp.stat().st_mtime >= STALE_TMP_S:
+                log.info("removing %s, left by a killed write", tmp)
+                tmp.unlink()
+        except FileNotFoundError:
+            pass
+
+
+def _resume_partial(
+    part: Path, loaded: xr.Dataset
+) -> tuple[xr.Dataset, MDSimulation, History] | None:
+    """The partial checkpoint ``part`` of a killed run (dataset, simulation, history), if
+    there is one that can be resumed; else None (logged): a missing file, an unreadable,
+    foreign or altered one (``CheckpointError``), or one from another loading checkpoint."""
+    if not part.exists():
+        return None
+    try:
+        dp = read_checkpoint(part)  # format version and checksum verified
+        if dp.attrs.get("parent_checksum") != loaded.attrs.get("checksum"):
+            raise CheckpointError(
+                str(part),
+                "it descends from another loading checkpoint (parent_checksum "
+                f"{dp.attrs.get('parent_checksum')!r}, loaded {loaded.attrs.get('checksum')!r})",
+            )
+        resumed = dp, MDSimulation.from_dataset(dp, part), _history_from(dp)
+    except (CheckpointError, OSError, ValueError, KeyError) as exc:
+        log.warning(
+            "ignoring partial checkpoint %s, restarting from the loaded state: %s", part, exc
+        )
+        return None
+    log.info("resuming from %s at t = %s (step %s)", part, dp.attrs["time"], dp.attrs["step"])
+    return resumed
+
+
 def piston_point(
     loaded: str | os.PathLike,
     scene: dict,
@@ -158,8 +229,10 @@ def piston_point(
     scheme: str = "piston",
 ) -> Path:
     """Continue the piston from the loading checkpoint until the front nears the far wall,
-    then measure the Hugoniot point. A periodic checkpoint ``<out>.part.nc`` lets a killed
-    job resume where it stopped."""
+    then measure the Hugoniot point. A periodic checkpoint ``<out>.part.nc`` (every
+    ``shock.checkpoint_every`` samples) lets a killed job resume where it stopped; one that
+    fails its checks (format version, checksum, same loading checkpoint) is logged and
+    ignored, and the run starts again from the loading checkpoint."""
     t0, c0 = time.perf_counter(), _cpu()
     sh = scene["shock"]
     name = scene.get("name", "")
@@ -172,20 +245,16 @@ def piston_point(
             base_values, {}, None, scheme, name, status, ds.attrs.get("diagnostic", ""), scene
         )
         return write_netcdf(ds_out, out)
+    verify_checkpoint(ds, loaded)  # its pole is used whichever state the run resumes from
     part = Path(str(out) + ".part.nc")
-    src = ds
-    if part.exists():
-        try:
-            with xr.open_dataset(part, engine="netcdf4") as dp:
-                dp.load()
-            src = dp
-            log.info("resuming from %s at t = %s", part, dp.attrs["time"])
-        except (OSError, ValueError, KeyError) as exc:
-            log.warning("ignoring unreadable partial checkpoint %s: %s", part, exc)
+    _remove_stale_temporaries(Path(out))
+    resumed = _resume_partial(part, ds)
+    if resumed is None:
+        src, sim, h = ds, MDSimulation.from_dataset(ds, loaded), _history_from(ds)
+    else:
+        src, sim, h = resumed
     pole = _pole_from(ds)
     cost = json.loads(src.attrs.get("cost", ds.attrs.get("cost", "{}")))
-    sim = MDSimulation.from_dataset(src)
-    h = _history_from(src)
     p = _piston_params(scene, u_p, sim)
     step0 = sim.state.step
     n_since = [0]
@@ -197,10 +266,7 @@ def piston_point(
             c["wall_s"] = c.get("wall_s", 0) + time.perf_counter() - t0
             c["cpu_s"] = c.get("cpu_s", 0) + _cpu() - c0
             c["atom_steps"] = c.get("atom_steps", 0) + sim.state.n * (sim.state.step - step0)
-            extra = xr.merge([_history_extra(h), xr.Dataset(scalar_vars(pole, POLE_VARS))])
-            sim.save(
-                part, extra=extra, attrs={"stage": "drive", "status": "ok", "cost": json.dumps(c)}
-            )
+            save_partial(sim, h, pole, c, ds, part)
 
     status, diagnostic = "ok", ""
     try:

@@ -58,13 +58,19 @@ def window_start(
                               "diagnostic": ds.attrs.get("diagnostic", "")}), out,
         )  # fmt: skip
     w, sh, s = scene["window"], scene["shock"], scene["sample"]
-    pole = _pole_from(ds)
     sim = MDSimulation.from_dataset(ds)
     h = _history_from(ds).arrays()
     n = h["t"].size
     a, *_ = line_fit(h["t"][n // 2 :], h["front"][n // 2 :])
+    if not np.isfinite(a):
+        a, *_ = line_fit(h["t"], h["front"])
     D_guess = float(a + u_p)
-    res = make_reservoir(
+    if not (np.isfinite(D_guess) and D_guess > u_p):
+        return write_netcdf(
+            xr.Dataset(attrs={**attrs, "status": "no_front_speed", "diagnostic":
+                              f"the loading stage gives no front speed ({n} samples)"}), out,
+        )  # fmt: skip
+    res, inflow = make_reservoir(
         (s["cells"][1], s["cells"][2]), s["rho0"], s["T0"], sim.lj, sim.dt, s["seed"] + 7919,
         w["reservoir_equilibrate_time"], s["thermostat_tau"],
     )  # fmt: skip
@@ -90,13 +96,14 @@ def window_start(
     sums = win.profile_sums(bw)
     edges = np.arange(sums.shape[0] + 1) * bw
     ux = fields_from_sums(sums, win.area * bw)["ux"]
-    x_f = front_position(ux, sums[:, 0], edges, g.x_lo, g.x_hi)
+    x_f = front_position(ux, sums[:, 0], edges, g.x_lo, g.x_hi, win.u_out, win.u_in)
     if not np.isfinite(x_f):
         x_f = g.x_lo + w["front_fraction"] * g.length
     shocked = region_state(sums, edges, g.x_lo + 0.5 * sh["gap"], x_f - 0.5 * sh["gap"], win.area)
-    upstream = {"n": pole["rho0"], "Pxx": pole["P0"]}
+    upstream = {"n": inflow["rho0"], "Pxx": inflow["P0"]}
     sig = OmegaSignal.from_states(w["omega"], g.length, win.area, upstream, shocked, bw)
-    extra = xr.Dataset(scalar_vars(pole, POLE_VARS))
+    # The window's pole is the inflow material's state (md.window.make_reservoir).
+    extra = xr.Dataset(scalar_vars(inflow, POLE_VARS))
     return win.save(
         out,
         extra=extra,
@@ -126,8 +133,8 @@ def steady_state(
     Each sample: the profile sums and the front (velocity change point inside the window);
     then ``analysis.shock.analyse_piston`` with the window edges as the boundaries, the
     upstream velocity u_in and the downstream u_out known exactly: D = L dω/dt-like front
-    drift − u_in, u_p = u_out − u_in. Returns the point values, the profile history and the
-    upstream state (measured ahead of the front) the point refers to."""
+    drift − u_in, u_p = u_out − u_in; ``pole`` is the inflow material's state (saved in the
+    window checkpoint). Returns the point values, the profile history and that pole."""
     sh, w = scene["shock"], scene["window"]
     bw, every = sh["bin_width"], w["sample_every"]
     g = win.geom
@@ -139,29 +146,20 @@ def steady_state(
         edges = np.arange(sums.shape[0] + 1) * bw
         ux = fields_from_sums(sums, win.area * bw)["ux"]
         t.append(win.time)
-        front.append(front_position(ux, sums[:, 0], edges, g.x_lo, g.x_hi))
+        front.append(front_position(ux, sums[:, 0], edges, g.x_lo, g.x_hi, win.u_out, win.u_in))
         sums_all.append(sums)
     h = {
         "t": np.asarray(t), "front": np.asarray(front), "stage": np.ones(n, dtype=np.int8),
         "x_left": np.full(n, g.x_lo), "x_right": np.full(n, g.x_hi), "sums": np.asarray(sums_all),
     }  # fmt: skip
-    args = (win.area, bw, sh["gap"])
-    kw = dict(residual_tol=sh["residual_tol"], avg_length=sh["avg_length"],
-              u_upstream=win.u_in, u_piston=win.u_out)  # fmt: skip
-    # The material ahead of the front comes from the inflow reservoir, not from the piston
-    # sample whose pole was measured: the two differ by the canonical fluctuation of a
-    # finite sample's energy (about 0.03 epsilon per atom here, 1 % of E − E0). So the jump
-    # conditions are taken from the state measured just ahead of the front.
-    first = analyse_piston(h, pole, *args, **kw)
-    upstream = {"rho0": first["ahead_rho"], "P0": first["ahead_P"], "E0": first["ahead_E"]}
-    upstream.update({k + "_err": first[f"ahead_{v}_err"] for k, v in
-                     (("rho0", "rho"), ("P0", "P"), ("E0", "E"))})  # fmt: skip
-    upstream.update({k: pole[k] for k in ("T0", "T0_err", "Pyy0", "Pyy0_err") if k in pole})
-    r = analyse_piston(h, upstream, *args, **kw)
+    r = analyse_piston(
+        h, pole, win.area, bw, sh["gap"], residual_tol=sh["residual_tol"],
+        avg_length=sh["avg_length"], u_upstream=win.u_in, u_piston=win.u_out,
+    )  # fmt: skip
     # u_p = u_out − u_in is what the boundaries impose; u_p_measured (u_s − u_a) checks it.
     r["u_p_set"] = r.pop("u_p")
     r.pop("u_p_err")
-    return r, h, upstream
+    return r, h, pole
 
 
 def _profile_vars(h: dict, bw: float, area: float) -> dict:

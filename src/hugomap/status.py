@@ -5,20 +5,26 @@ Snakemake state, so it works while a sweep runs, after it was killed, or on a co
 
     results/<scene>/sample.nc                      prepared sample
     results/<scene>/up<u>/loaded.nc                loading checkpoint (attr ``status``)
-    results/<scene>/up<u>/piston.nc                the point (variable ``status``, ``diagnostic``)
-    results/<scene>/up<u>/piston.nc.part.nc        periodic checkpoint of a running point
+    results/<scene>/up<u>/piston.nc                a point (variable ``status``, ``diagnostic``)
+    results/<scene>/up<u>/piston.nc.part.nc        periodic checkpoint of a running piston point
+    results/<scene>/up<u>/window.nc                window checkpoint (attr ``status``)
+    results/<scene>/up<u>/{amw,mw,dichotomy}.nc    window points (as piston.nc)
+    results/<scene>/up<u>/dichotomy/state<k>.json  the dichotomy's loop state, iteration k
     results/<scene>/reference.nc                   reference Hugoniot
     results/hugoniot/<scene>.nc                    the scene's aggregate
-    results/logs/<scene>/up<u>/{load,piston}.log   job logs (a Python traceback = a crash)
+    results/logs/<scene>/up<u>/<stage>.log         job logs (a Python traceback = a crash)
 
-Each piston velocity of the config is in one state: ``ok`` or ``not_converged`` (done),
-``failed`` (the solver stopped with a status, the job crashed, or a file is unreadable),
-``running`` (a periodic checkpoint exists and no final file; its simulated time and the age of
-the checkpoint are shown: an old checkpoint means the job was killed and will resume from it),
-or ``pending`` (nothing yet, or only the loading checkpoint). Points found on disk but not in
-the config are listed too, marked as such. Where a point folder holds dichotomy loop states
-(JSON with ``k``, ``bracket``, ``pending``, ``done``), the latest iteration and its bracket
-are shown.
+One line per piston velocity and scheme of the config (top-level ``schemes``, or the scene's
+own ``scenes.<s>.schemes``), in one state: ``ok`` or ``not_converged`` (done), ``failed`` (the
+solver stopped with a status, a stage it depends on failed, the job crashed, or a file is
+unreadable), ``running``, or ``pending`` (nothing yet, or only the checkpoints it starts
+from). Running means: the piston has a periodic checkpoint and no final file (its simulated
+time and the age of the checkpoint are shown: an old checkpoint means the job was killed and
+will resume from it); an AMW/MW run has a job log newer than the window checkpoint; a
+dichotomy has loop states (its latest iteration and bracket are shown, from the JSON object
+with ``k``, ``bracket``, ``pending``, ``done``, ``status``; a loop that ended without a root
+is failed with its ``reason``). Points and schemes found on disk but not in the config are
+listed too, marked as such.
 """
 
 from __future__ import annotations
@@ -38,20 +44,24 @@ DONE_STATES = ("ok", "not_converged")
 STATES = ("ok", "not_converged", "failed", "running", "pending")
 RESERVED = ("hugoniot", "figures", "logs")
 PART_SUFFIX = ".part.nc"
+SCHEMES = ("piston", "amw", "mw", "dichotomy")  # every scheme the workflow knows
+WINDOW_SCHEMES = ("amw", "mw", "dichotomy")  # those that start from the window checkpoint
 
 
 @dataclass
 class PointStatus:
-    """The state of one point (one piston velocity of one scene)."""
+    """The state of one point: one scheme at one piston velocity of one scene."""
 
     u_p: float
     tag: str
     state: str
+    scheme: str = "piston"
     status: str = ""
     diagnostic: str = ""
     time: float | None = None
     step: int | None = None
     checkpoint_age_s: float | None = None
+    log_age_s: float | None = None
     in_config: bool = True
     dichotomy: dict[str, Any] | None = None
 
@@ -100,26 +110,120 @@ def _crash(log: Path) -> str | None:
     return f"job crashed ({log.name}): {lines[-1] if lines else 'no message'}"
 
 
+def _seconds_since(path: Path, now: float | None) -> float:
+    """Seconds since ``path`` was last written (never negative)."""
+    return max((time.time() if now is None else now) - path.stat().st_mtime, 0.0)
+
+
+def _final(final: Path, p: PointStatus) -> bool:
+    """Fill ``p`` from a point file if there is one (done, or failed); True if there was."""
+    if not final.exists():
+        return False
+    try:
+        p.status, p.diagnostic, _ = _open_status(final)
+    except Exception as exc:  # any unreadable file is reported, not raised
+        p.state, p.diagnostic = "failed", f"unreadable {final.name}: {exc}"
+        return True
+    p.state = p.status if p.status in DONE_STATES else "failed"
+    return True
+
+
 def point_status(
-    results: str | Path, scene: str, u_p: float, now: float | None = None
+    results: str | Path, scene: str, u_p: float, now: float | None = None, scheme: str = "piston"
 ) -> PointStatus:
-    """The state of the point of ``scene`` at piston velocity ``u_p`` under ``results``."""
+    """The state of ``scheme``'s point of ``scene`` at piston velocity ``u_p`` under
+    ``results`` (``now``: the time the ages of checkpoints and logs are counted to)."""
+    if scheme not in SCHEMES:
+        raise ValueError(f"unknown scheme {scheme!r}; known: {', '.join(SCHEMES)}")
     results = Path(results)
     tag = point_tag(u_p)
     folder = results / scene / f"up{tag}"
+    logs = results / "logs" / scene / f"up{tag}"
+    p = PointStatus(u_p=float(u_p), tag=tag, state="pending", scheme=scheme)
+    if scheme == "piston":
+        return _piston(folder, logs, p, now)
+    if scheme == "dichotomy":
+        p.dichotomy = dichotomy_progress(folder)
+    if _final(folder / f"{scheme}.nc", p) or not _window_ok(folder, logs, p):
+        return p
+    if scheme == "dichotomy":
+        return _dichotomy(folder, logs, p, now)
+    log = logs / f"{scheme}.log"
+    crash = _crash(log)
+    if crash:
+        p.state, p.diagnostic = "failed", crash
+    elif log.exists() and log.stat().st_mtime >= (folder / "window.nc").stat().st_mtime:
+        p.state, p.log_age_s = "running", _seconds_since(log, now)
+    return p
+
+
+def _loaded_ok(folder: Path, logs: Path, p: PointStatus, next_log: str) -> bool:
+    """Whether the loading checkpoint is there and ok; else ``p`` says why not (pending, or
+    failed: the stage failed, its file is unreadable, or the load job or the ``next_log`` job
+    that reads the checkpoint crashed)."""
+    loaded = folder / "loaded.nc"
+    if loaded.exists():
+        try:
+            p.status, p.diagnostic, _ = _open_status(loaded)
+        except Exception as exc:
+            p.state, p.diagnostic = "failed", f"unreadable {loaded.name}: {exc}"
+            return False
+        if p.status not in ("", "ok"):
+            p.state = "failed"
+            return False
+        p.status = "loaded"
+        crash = _crash(logs / next_log)
+    else:
+        crash = _crash(logs / "load.log")
+    if crash:
+        p.state, p.diagnostic = "failed", crash
+    return loaded.exists() and not crash
+
+
+def _window_ok(folder: Path, logs: Path, p: PointStatus) -> bool:
+    """Whether the window checkpoint is there and ok; else ``p`` says why not."""
+    window = folder / "window.nc"
+    if not window.exists():
+        _loaded_ok(folder, logs, p, "window.log")
+        return False
+    try:
+        status, diagnostic, _ = _open_status(window)
+    except Exception as exc:
+        p.state, p.diagnostic = "failed", f"unreadable {window.name}: {exc}"
+        return False
+    if status not in ("", "ok"):
+        p.state, p.status, p.diagnostic = "failed", status, f"window stage: {diagnostic}"
+        return False
+    p.status = "window"
+    return True
+
+
+def _dichotomy(folder: Path, logs: Path, p: PointStatus, now: float | None) -> PointStatus:
+    """A dichotomy whose window is ready: a crashed loop job, the loop's progress, or its
+    failure (a loop that ended without a root: the state's status and reason)."""
+    for log in sorted(logs.glob("dichotomy_*.log")) + [logs / "dichotomy.log"]:
+        crash = _crash(log)
+        if crash:
+            p.state, p.diagnostic = "failed", crash
+            return p
+    d = p.dichotomy
+    if d is None:
+        return p
+    if d["done"] and d["status"] != "ok":
+        p.state, p.status, p.diagnostic = "failed", str(d["status"]), str(d.get("reason", ""))
+        return p
+    p.state = "running"
+    files = [f for f in (folder / "dichotomy").glob("*.json") if f.is_file()]
+    if files:
+        p.checkpoint_age_s = min(_seconds_since(f, now) for f in files)
+    return p
+
+
+def _piston(folder: Path, logs: Path, p: PointStatus, now: float | None) -> PointStatus:
+    """The piston point: done, running (periodic checkpoint), or what its loading says."""
     final = folder / "piston.nc"
     part = folder / ("piston.nc" + PART_SUFFIX)
-    loaded = folder / "loaded.nc"
-    logs = results / "logs" / scene / f"up{tag}"
-    p = PointStatus(u_p=float(u_p), tag=tag, state="pending")
-    p.dichotomy = dichotomy_progress(folder)
-    if final.exists():
-        try:
-            p.status, p.diagnostic, _ = _open_status(final)
-        except Exception as exc:  # any unreadable file is reported, not raised
-            p.state, p.diagnostic = "failed", f"unreadable {final.name}: {exc}"
-            return p
-        p.state = p.status if p.status in DONE_STATES else "failed"
+    if _final(final, p):
         return p
     if part.exists():
         p.state = "running"
@@ -130,24 +234,28 @@ def point_status(
             p.step = int(attrs["step"]) if "step" in attrs else None
         except Exception as exc:
             p.diagnostic = f"unreadable checkpoint {part.name}: {exc}"
-        p.checkpoint_age_s = max((time.time() if now is None else now) - part.stat().st_mtime, 0.0)
+        p.checkpoint_age_s = _seconds_since(part, now)
         return p
-    if loaded.exists():
-        try:
-            p.status, p.diagnostic, _ = _open_status(loaded)
-        except Exception as exc:
-            p.state, p.diagnostic = "failed", f"unreadable {loaded.name}: {exc}"
-            return p
-        if p.status not in ("", "ok"):
-            p.state = "failed"
-            return p
-        p.status = "loaded"
-        crash = _crash(logs / "piston.log")
-    else:
-        crash = _crash(logs / "load.log")
-    if crash:
-        p.state, p.diagnostic = "failed", crash
+    _loaded_ok(folder, logs, p, "piston.log")
     return p
+
+
+def _disk_schemes(results: Path, scene: str, tag: str) -> list[str]:
+    """The schemes with any trace (point, checkpoint, loop state, job log) in a point folder."""
+    folder = results / scene / f"up{tag}"
+    logs = results / "logs" / scene / f"up{tag}"
+    found = []
+    for s in SCHEMES:
+        traces = [folder / f"{s}.nc", logs / f"{s}.log"]
+        if s == "piston":
+            traces.append(folder / ("piston.nc" + PART_SUFFIX))
+        if s == "dichotomy":
+            traces.append(folder / "dichotomy")
+            traces += list(logs.glob("dichotomy_state*.log"))
+            traces += list(logs.glob("dichotomy_trial*.log"))
+        if any(t.exists() for t in traces):
+            found.append(s)
+    return found
 
 
 def _disk_points(results: Path, scene: str) -> dict[str, float]:
@@ -164,24 +272,43 @@ def _disk_points(results: Path, scene: str) -> dict[str, float]:
     return out
 
 
-def scene_status(
-    results: str | Path, scene: str, u_values: list[float] | None, now: float | None = None
-) -> dict[str, Any]:
-    """The state of every point of one scene (``u_values`` from the config; None: the
-    folders found on disk), with counts and the scene-level files."""
-    results = Path(results)
-    wanted = {point_tag(u): float(u) for u in (u_values or [])}
-    on_disk = _disk_points(results, scene)
-    points = [point_status(results, scene, u, now) for u in wanted.values()]
-    for tag, u in on_disk.items():
-        if tag not in wanted:
-            p = point_status(results, scene, u, now)
-            p.in_config = u_values is None
-            points.append(p)
-    points.sort(key=lambda p: p.u_p)
+def _counts(points: list[PointStatus]) -> dict[str, int]:
     counts = {s: sum(p.state == s for p in points) for s in STATES}
     counts["done"] = counts["ok"] + counts["not_converged"]
     counts["total"] = len(points)
+    return counts
+
+
+def scene_status(
+    results: str | Path,
+    scene: str,
+    u_values: list[float] | None,
+    now: float | None = None,
+    schemes: list[str] | None = None,
+) -> dict[str, Any]:
+    """The state of every point of one scene, one per piston velocity and scheme
+    (``u_values``, ``schemes`` from the config; None: what is found on disk, the piston
+    where a point folder shows no scheme yet), with counts (all points and per scheme) and
+    the scene-level files."""
+    results = Path(results)
+    wanted = {point_tag(u): float(u) for u in (u_values or [])}
+    on_disk = _disk_points(results, scene)
+    points = []
+    for tag, u in {**wanted, **on_disk}.items():
+        here = _disk_schemes(results, scene, tag)
+        if schemes is None:
+            todo = [(s, True) for s in (here or ["piston"])]
+        else:
+            todo = [(s, True) for s in schemes] + [(s, False) for s in here if s not in schemes]
+        for s, listed in todo:
+            p = point_status(results, scene, u, now, s)
+            p.in_config = listed and (u_values is None or tag in wanted)
+            points.append(p)
+    order: dict[str, int] = {}
+    for s in [*(schemes or []), *SCHEMES]:  # the config's order, then the others
+        order.setdefault(s, len(order))
+    points.sort(key=lambda p: (p.u_p, order[p.scheme]))
+    used = sorted({p.scheme for p in points}, key=order.__getitem__)
     sample = results / scene / "sample.nc"
     if sample.exists():
         sample_state = "ok"
@@ -190,7 +317,10 @@ def scene_status(
         sample_state = crash or "missing"
     return {
         "scene": scene,
-        "counts": counts,
+        "schemes": used,
+        "n_u_p": len({p.tag for p in points}),
+        "counts": _counts(points),
+        "counts_by_scheme": {s: _counts([p for p in points if p.scheme == s]) for s in used},
         "sample": sample_state,
         "reference": (results / scene / "reference.nc").exists(),
         "aggregate": (results / "hugoniot" / f"{scene}.nc").exists(),
@@ -201,11 +331,16 @@ def scene_status(
 def sweep_status(
     results: str | Path = "results", config: dict | None = None, now: float | None = None
 ) -> dict[str, Any]:
-    """The state of a sweep: per scene of ``config`` (or, without one, per scene folder
-    found under ``results`` or ``results/logs``), see ``scene_status``."""
+    """The state of a sweep: per scene of ``config`` (its piston velocities and schemes) or,
+    without one, per scene folder found under ``results`` or ``results/logs``; see
+    ``scene_status``."""
     results = Path(results)
     if config is not None:
-        scenes = {name: sc["shock"]["u_p"] for name, sc in config["scenes"].items()}
+        top = config.get("schemes", ["piston"])
+        scenes = {
+            name: (sc["shock"]["u_p"], list(sc.get("schemes", top)))
+            for name, sc in config["scenes"].items()
+        }
     else:
         found = [
             d
@@ -214,7 +349,7 @@ def sweep_status(
             if d.is_dir() and not (top == results and d.name in RESERVED)
         ]
         scenes = {
-            name: None
+            name: (None, None)
             for name in sorted(
                 {
                     d.name
@@ -226,7 +361,10 @@ def sweep_status(
         }
     return {
         "results": str(results),
-        "scenes": [scene_status(results, name, ups, now) for name, ups in scenes.items()],
+        "scenes": [
+            scene_status(results, name, ups, now, schemes)
+            for name, (ups, schemes) in scenes.items()
+        ],
     }
 
 
@@ -265,8 +403,52 @@ def _one_line(text: str, limit: int = 100) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+def _counts_text(c: dict[str, int]) -> str:
+    return (
+        f"{c['done']} done ({c['ok']} ok, {c['not_converged']} not converged), "
+        f"{c['running']} running, {c['failed']} failed, {c['pending']} pending"
+    )
+
+
+def _detail(p: dict[str, Any]) -> str:
+    """The detail column of one point's row."""
+    if p["state"] == "running":
+        bits = []
+        if p.get("dichotomy"):
+            bits.append(_dichotomy_text(p["dichotomy"]))
+        if p["time"] is not None:
+            bits.append(f"t = {p['time']:.4g} tau")
+        if p["step"] is not None:
+            bits.append(f"step {p['step']}")
+        if p["checkpoint_age_s"] is not None:
+            what = "state" if p["scheme"] == "dichotomy" else "checkpoint"
+            bits.append(f"last {what} {_age(p['checkpoint_age_s'])} ago")
+        if p.get("log_age_s") is not None:
+            bits.append(f"started, log written {_age(p['log_age_s'])} ago")
+        if p["diagnostic"]:
+            bits.append(p["diagnostic"])
+        detail = ", ".join(bits)
+    elif p["state"] == "failed" and p["status"] not in ("", "ok", "loaded", "window"):
+        detail = f"{p['status']}: {p['diagnostic']}"
+    elif p["state"] == "pending" and p["status"] == "loaded":
+        if p["scheme"] == "piston":
+            detail = "loaded; piston run not started (or before its first checkpoint)"
+        else:
+            detail = "loaded; window not cut yet"
+    elif p["state"] == "pending" and p["status"] == "window":
+        detail = f"window ready; {p['scheme']} run not started"
+    else:
+        detail = p["diagnostic"]
+    if p.get("dichotomy") and p["state"] != "running":
+        detail = "; ".join(x for x in (detail, _dichotomy_text(p["dichotomy"])) if x)
+    if not p["in_config"]:
+        detail = ("not in config; " + detail).rstrip("; ")
+    return detail
+
+
 def format_table(report: dict[str, Any]) -> str:
-    """The report as a human-readable table, one block per scene."""
+    """The report as a human-readable table, one block per scene: counts (all points, then
+    per scheme), then one row per piston velocity and scheme."""
     out = [f"results: {report['results']}"]
     if not report["scenes"]:
         out.append("no scenes found")
@@ -279,40 +461,22 @@ def format_table(report: dict[str, Any]) -> str:
                 f"aggregate {'written' if sc['aggregate'] else 'missing'}",
             ]
         )
+        schemes = sc.get("schemes") or []
         out.append(
-            f"\nscene {sc['scene']}: {c['total']} points: {c['done']} done ({c['ok']} ok, "
-            f"{c['not_converged']} not converged), {c['running']} running, {c['failed']} "
-            f"failed, {c['pending']} pending; {files}"
+            f"\nscene {sc['scene']}: {c['total']} points ({sc.get('n_u_p', c['total'])} u_p x "
+            f"{len(schemes)} schemes: {', '.join(schemes)}): {_counts_text(c)}; {files}"
         )
+        if len(schemes) > 1:
+            w = max(len(s) for s in schemes)
+            for s in schemes:
+                cs = sc["counts_by_scheme"][s]
+                out.append(f"  {s + ':':<{w + 1}} {cs['total']} points: {_counts_text(cs)}")
         if sc["sample"] not in ("ok", "missing"):
             out.append(f"  sample: {_one_line(sc['sample'])}")
-        rows = [("u_p", "state", "detail")]
-        for p in sc["points"]:
-            if p["state"] == "running":
-                bits = []
-                if p["time"] is not None:
-                    bits.append(f"t = {p['time']:.4g} tau")
-                if p["step"] is not None:
-                    bits.append(f"step {p['step']}")
-                if p["checkpoint_age_s"] is not None:
-                    bits.append(f"last checkpoint {_age(p['checkpoint_age_s'])} ago")
-                if p["diagnostic"]:
-                    bits.append(p["diagnostic"])
-                detail = ", ".join(bits)
-            elif p["state"] == "failed" and p["status"] not in ("", "ok", "loaded"):
-                detail = f"{p['status']}: {p['diagnostic']}"
-            elif p["state"] == "pending" and p["status"] == "loaded":
-                detail = "loaded; piston run not started (or before its first checkpoint)"
-            else:
-                detail = p["diagnostic"]
-            if p.get("dichotomy"):
-                detail = "; ".join(x for x in (detail, _dichotomy_text(p["dichotomy"])) if x)
-            if not p["in_config"]:
-                detail = ("not in config; " + detail).rstrip("; ")
-            rows.append((p["tag"], p["state"], _one_line(detail)))
-        w0 = max(len(r[0]) for r in rows)
-        w1 = max(len(r[1]) for r in rows)
-        out += [f"  {a:>{w0}}  {b:<{w1}}  {d}".rstrip() for a, b, d in rows]
+        rows = [("u_p", "scheme", "state", "detail")]
+        rows += [(p["tag"], p["scheme"], p["state"], _one_line(_detail(p))) for p in sc["points"]]
+        w0, w1, w2 = (max(len(r[i]) for r in rows) for i in range(3))
+        out += [f"  {a:>{w0}}  {s:<{w1}}  {b:<{w2}}  {d}".rstrip() for a, s, b, d in rows]
     return "\n".join(out)
 
 

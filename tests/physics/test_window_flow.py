@@ -38,7 +38,7 @@ def flow():
     sim = MDSimulation(sample, LJ, DT, T_bath=T0, tau_bath=0.2, seed=5)
     sim.advance(1500)  # melt and equilibrate (3 tau)
     sim.T_bath = None
-    res = make_reservoir((4, 4), RHO0, T0, LJ, DT, seed=6, equilibrate_time=3.0)
+    res, _ = make_reservoir((4, 4), RHO0, T0, LJ, DT, seed=6, equilibrate_time=3.0)
     win = MDWindow.from_piston(
         sim, res, x_front=19.0, u_p=0.0, D_guess=V, length=24.0, front_fraction=0.5,
         ghost_width=3.0, cut_every=2.0, sync_steps=25,

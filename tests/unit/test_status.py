@@ -1,9 +1,11 @@
 """``python -m hugomap status`` on a synthetic results folder (no MD is run).
 
 The folder holds one file layout per point state, written with the project's own writers
-(``point_dataset`` + ``write_netcdf``) where the workflow uses them, so the reader is tested
-against the real netCDF layout: a ``status`` variable in point files, a ``status`` attribute
-in checkpoints, the ``time``/``step`` attributes of a periodic ``.part.nc`` checkpoint.
+(``point_dataset`` + ``write_netcdf``, ``write_json``) where the workflow uses them, so the
+reader is tested against the real layout: a ``status`` variable in point files, a ``status``
+attribute in checkpoints (loading and window), the ``time``/``step`` attributes of a periodic
+``.part.nc`` checkpoint, the dichotomy's ``state<k>.json`` loop states. Every scheme of the
+config (top level, or the scene's own ``schemes``) has its own row per piston velocity.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import yaml
 
 from hugomap.cli import main
 from hugomap.config import validate_config
-from hugomap.io.atomic import write_netcdf
+from hugomap.io.atomic import write_json, write_netcdf
 from hugomap.io.dataset import point_dataset
 from hugomap.status import format_table, sweep_status
 
@@ -35,7 +37,7 @@ def _config() -> dict:
 
 def _point(path: Path, status: str, diagnostic: str, u: float) -> None:
     values = {"piston_velocity": u, "D": 3.0, "P": 10.0, "converged": status == "ok"}
-    ds = point_dataset(values, {"rho0": 0.8}, None, "piston", "tiny", status, diagnostic, {})
+    ds = point_dataset(values, {"rho0": 0.8}, None, path.stem, "tiny", status, diagnostic, {})
     write_netcdf(ds, path)
 
 
@@ -86,8 +88,8 @@ def sweep(tmp_path: Path) -> tuple[Path, Path]:
     return res, cfg_file
 
 
-def _by_tag(scene: dict) -> dict[str, dict]:
-    return {p["tag"]: p for p in scene["points"]}
+def _by_tag(scene: dict, scheme: str = "piston") -> dict[str, dict]:
+    return {p["tag"]: p for p in scene["points"] if p["scheme"] == scheme}
 
 
 def test_every_state_is_read(sweep: tuple[Path, Path]) -> None:
@@ -95,9 +97,12 @@ def test_every_state_is_read(sweep: tuple[Path, Path]) -> None:
     report = sweep_status(res, _config(), now=NOW)
     (scene,) = report["scenes"]
     pts = _by_tag(scene)
-    assert [p["tag"] for p in scene["points"]] == [
-        "0.5", "1", "1.5", "2", "2.5", "3", "3.5", "4", "5", "9",
-    ]  # fmt: skip
+    tags = ["0.5", "1", "1.5", "2", "2.5", "3", "3.5", "4", "5", "9"]
+    assert [p["tag"] for p in scene["points"] if p["scheme"] == "piston"] == tags
+    assert scene["schemes"] == ["piston", "amw", "dichotomy"]  # the config's, in its order
+    assert [(p["tag"], p["scheme"]) for p in scene["points"]] == [
+        (t, s) for t in tags for s in ("piston", "amw", "dichotomy")
+    ]
     assert pts["0.5"]["state"] == "ok" and pts["0.5"]["status"] == "ok"
     assert pts["1"]["state"] == "not_converged"
     assert pts["1"]["diagnostic"] == "jump residuals: mass +4.000%"
@@ -115,10 +120,29 @@ def test_every_state_is_read(sweep: tuple[Path, Path]) -> None:
     assert pts["5"]["state"] == "failed" and "unreadable piston.nc" in pts["5"]["diagnostic"]
     assert pts["9"]["in_config"] is False and pts["9"]["state"] == "ok"
     assert all(p["in_config"] for t, p in pts.items() if t != "9")
-    assert scene["counts"] == {
+    assert scene["counts_by_scheme"]["piston"] == {
         "ok": 2, "not_converged": 1, "failed": 4, "running": 1, "pending": 2,
         "done": 3, "total": 10,
     }  # fmt: skip
+    # The window schemes of these points: no window yet; they fail where the loading failed
+    # or its job crashed, and wait elsewhere (up2, up2.5: loaded, window not cut yet).
+    for s in ("amw", "dichotomy"):
+        w = _by_tag(scene, s)
+        assert {t for t, p in w.items() if p["state"] == "failed"} == {"3", "3.5"}
+        assert w["3"]["status"] == "atom_lost" and w["3"]["diagnostic"] == "atom 3 left"
+        assert w["3.5"]["diagnostic"] == "job crashed (load.log): MemoryError: out of memory"
+        assert w["2"]["state"] == w["2.5"]["state"] == "pending"
+        assert w["2"]["status"] == w["2.5"]["status"] == "loaded"
+        assert w["9"]["in_config"] is False
+        assert scene["counts_by_scheme"][s] == {
+            "ok": 0, "not_converged": 0, "failed": 2, "running": 0, "pending": 8,
+            "done": 0, "total": 10,
+        }  # fmt: skip
+    assert scene["counts"] == {
+        "ok": 2, "not_converged": 1, "failed": 8, "running": 1, "pending": 18,
+        "done": 3, "total": 30,
+    }  # fmt: skip
+    assert scene["n_u_p"] == 10
     assert scene["sample"] == "ok" and scene["reference"] and not scene["aggregate"]
 
 
@@ -127,19 +151,26 @@ def test_table(sweep: tuple[Path, Path]) -> None:
     text = format_table(sweep_status(res, _config(), now=NOW))
     lines = text.splitlines()
     head = next(ln for ln in lines if ln.startswith("scene tiny"))
-    assert "10 points: 3 done (2 ok, 1 not converged), 1 running, 4 failed, 2 pending" in head
+    assert "30 points (10 u_p x 3 schemes: piston, amw, dichotomy)" in head
+    assert "3 done (2 ok, 1 not converged), 1 running, 8 failed, 18 pending" in head
     assert "sample ok, reference written, aggregate missing" in head
+    assert "  piston:    10 points: 3 done (2 ok, 1 not converged), 1 running, 4 failed, " in text
+    assert "  amw:       10 points: 0 done (0 ok, 0 not converged), 0 running, 2 failed, " in text
 
-    def row(tag: str) -> str:
-        return next(ln for ln in lines if ln.split()[:1] == [tag])
+    def row(tag: str, scheme: str = "piston") -> str:
+        return next(ln for ln in lines if ln.split()[:2] == [tag, scheme])
 
-    assert row("2").split()[1] == "running"
+    assert row("2").split()[2] == "running"
     assert "t = 12.5 tau, step 6250, last checkpoint 5 min ago" in row("2")
-    assert row("1.5").split()[1] == "failed" and "cfl: atom 17 moved" in row("1.5")
-    assert row("3").split()[1] == "failed" and "atom_lost: atom 3 left" in row("3")
+    assert row("1.5").split()[2] == "failed" and "cfl: atom 17 moved" in row("1.5")
+    assert row("3").split()[2] == "failed" and "atom_lost: atom 3 left" in row("3")
+    assert row("3", "dichotomy").split()[2] == "failed"
+    assert "atom_lost: atom 3 left" in row("3", "dichotomy")
     assert "loaded; piston run not started" in row("2.5")
-    assert row("4").split() == ["4", "pending"]
-    assert "not in config" in row("9")
+    assert "loaded; window not cut yet" in row("2.5", "amw")
+    assert row("4").split() == ["4", "piston", "pending"]
+    assert row("4", "amw").split() == ["4", "amw", "pending"]
+    assert "not in config" in row("9") and "not in config" in row("9", "dichotomy")
 
 
 def test_cli_json(sweep: tuple[Path, Path], capsys: pytest.CaptureFixture[str]) -> None:
@@ -151,6 +182,8 @@ def test_cli_json(sweep: tuple[Path, Path], capsys: pytest.CaptureFixture[str]) 
     (scene,) = report["scenes"]
     assert scene["scene"] == "tiny" and scene["counts"]["running"] == 1
     assert _by_tag(scene)["2"]["time"] == 12.5
+    assert _by_tag(scene, "amw")["2"]["time"] is None
+    assert scene["counts_by_scheme"]["dichotomy"]["total"] == 10
 
 
 def test_cli_table_and_bad_config(
@@ -158,7 +191,7 @@ def test_cli_table_and_bad_config(
 ) -> None:
     res, cfg_file = sweep
     assert main(["status", "--results", str(res), "--config", str(cfg_file)]) == 0
-    assert "scene tiny: 10 points" in capsys.readouterr().out
+    assert "scene tiny: 30 points (10 u_p x 3 schemes" in capsys.readouterr().out
     bad = yaml.safe_load(cfg_file.read_text())
     bad["scenes"]["tiny"]["shock"]["u_p"] = [-1.0]
     cfg_file.write_text(yaml.safe_dump(bad))
@@ -197,7 +230,8 @@ def test_empty_results(tmp_path: Path) -> None:
     """Before anything ran: every point pending; no results folder at all is not an error."""
     report = sweep_status(tmp_path / "results", _config(), now=NOW)
     (scene,) = report["scenes"]
-    assert scene["counts"]["pending"] == len(U_P) == scene["counts"]["total"]
+    assert scene["counts"]["pending"] == 3 * len(U_P) == scene["counts"]["total"]
+    assert all(c["pending"] == len(U_P) for c in scene["counts_by_scheme"].values())
     assert scene["sample"] == "missing"
     assert sweep_status(tmp_path / "nothing", None)["scenes"] == []
 
@@ -217,12 +251,27 @@ def test_crashed_preparation(tmp_path: Path) -> None:
     assert "sample failed" in text and "sample: job crashed (prepare.log)" in text
 
 
+def _window(path: Path, status: str = "ok", diagnostic: str = "") -> None:
+    """A stand-in for the window checkpoint (pipeline_window.window_start): its attributes."""
+    attrs = {"stage": "window", "status": status}
+    if status == "ok":
+        _checkpoint(path, **attrs, window_state=json.dumps({"u_out": -1.0}))
+    else:  # a failed window stage writes the status and diagnostic only
+        write_netcdf(xr.Dataset(attrs={**attrs, "diagnostic": diagnostic}), path)
+
+
+def _aged(path: Path, age: float) -> None:
+    os.utime(path, (NOW - age, NOW - age))
+
+
 def test_dichotomy_bracket(tmp_path: Path) -> None:
-    """The latest dichotomy loop state under a point folder is shown, whatever its file name;
-    other JSON files are ignored."""
+    """The latest dichotomy loop state under a point folder is shown on the dichotomy's row,
+    whatever its file name; other JSON files are ignored."""
     res = tmp_path / "results"
-    folder = res / "tiny/up1.5/dichotomy"
-    folder.mkdir(parents=True)
+    point = res / "tiny/up1.5"
+    folder = point / "dichotomy"
+    _checkpoint(point / "loaded.nc", stage="loaded", status="ok")
+    _window(point / "window.nc")
     base = {"trials": [], "done": False, "status": "running", "reason": "", "u_out": None}
     states = [
         {"k": 0, "bracket": None, "pending": [-1.2, -0.8]},
@@ -230,15 +279,122 @@ def test_dichotomy_bracket(tmp_path: Path) -> None:
         {"k": 2, "bracket": [-1.6, -1.2], "pending": [-1.4]},
     ]
     for s in states:
-        (folder / f"state{s['k']}.json").write_text(json.dumps(base | s))
-    (folder / "trial0.json").write_text(json.dumps({"u_out": -1.2, "slope": 0.3}))
+        write_json(base | s, folder / f"state{s['k']}.json")
+        _aged(folder / f"state{s['k']}.json", 90 - 30 * s["k"])
+    write_json({"u_out": -1.2, "slope": 0.3}, folder / "trial0_0.json")
+    _aged(folder / "trial0_0.json", 50)
     report = sweep_status(res, _config(), now=NOW)
-    d = _by_tag(report["scenes"][0])["1.5"]["dichotomy"]
+    row = _by_tag(report["scenes"][0], "dichotomy")["1.5"]
+    d = row["dichotomy"]
     assert d["k"] == 2 and d["bracket"] == [-1.6, -1.2] and d["pending"] == [-1.4]
-    assert _by_tag(report["scenes"][0])["1"]["dichotomy"] is None
+    assert row["state"] == "running" and row["checkpoint_age_s"] == pytest.approx(30.0)
+    assert _by_tag(report["scenes"][0])["1.5"]["dichotomy"] is None  # not on the piston row
+    assert _by_tag(report["scenes"][0], "dichotomy")["1"]["dichotomy"] is None
     text = format_table(report)
-    assert "dichotomy k = 2, bracket [-1.6, -1.2]" in text
+    assert "dichotomy k = 2, bracket [-1.6, -1.2], last state 30 s ago" in text
     done = base | {"k": 7, "bracket": [-1.45, -1.44], "pending": [], "done": True}
-    (folder / "state7.json").write_text(json.dumps(done | {"status": "ok", "u_out": -1.445}))
+    write_json(done | {"status": "ok", "u_out": -1.445}, folder / "state7.json")
     text = format_table(sweep_status(res, _config(), now=NOW))
-    assert "dichotomy k = 7, done: ok, u_out = -1.445" in text
+    assert "1.5  dichotomy  running  dichotomy k = 7, done: ok, u_out = -1.445" in text
+    _point(point / "dichotomy.nc", "ok", "", 1.5)
+    report = sweep_status(res, _config(), now=NOW)
+    assert _by_tag(report["scenes"][0], "dichotomy")["1.5"]["state"] == "ok"
+    assert "1.5  dichotomy  ok       dichotomy k = 7, done: ok" in format_table(report)
+
+
+def test_window_schemes(tmp_path: Path) -> None:
+    """AMW, MW and the dichotomy: done or failed from their point files; failed with the
+    window stage, its unreadable file or a crashed job; running (a job log newer than the
+    window checkpoint, the dichotomy's loop states); pending otherwise. The scene's own
+    ``schemes`` replace the top-level ones; a scheme found on disk but not in the config is
+    listed, marked as such."""
+    cfg = _config()
+    cfg["schemes"] = ["piston", "amw"]
+    cfg["scenes"]["tiny"]["schemes"] = ["piston", "mw", "dichotomy"]
+    cfg["scenes"]["tiny"]["shock"]["u_p"] = [1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0]
+    res = tmp_path / "results"
+    sc, logs = res / "tiny", res / "logs/tiny"
+    for u in ("1", "1.5", "2", "2.5", "3", "3.5", "4"):
+        _checkpoint(sc / f"up{u}/loaded.nc", stage="loaded", status="ok")
+    # up1: every point written; amw is on disk from an earlier config
+    _window(sc / "up1/window.nc")
+    _point(sc / "up1/piston.nc", "ok", "", 1.0)
+    _point(sc / "up1/mw.nc", "not_converged", "jump residuals: energy +5.000%", 1.0)
+    _point(sc / "up1/dichotomy.nc", "bracket_not_found", "slope kept its sign", 1.0)
+    _point(sc / "up1/amw.nc", "ok", "", 1.0)
+    # up1.5: MW running (its log is newer than the window), the dichotomy looping
+    _window(sc / "up1.5/window.nc")
+    _aged(sc / "up1.5/window.nc", 600)
+    (logs / "up1.5").mkdir(parents=True)
+    (logs / "up1.5/mw.log").write_text("INFO steering u_out\n")
+    _aged(logs / "up1.5/mw.log", 60)
+    state = {"k": 1, "bracket": [-1.2, -0.8], "pending": [-1.0], "done": False,
+             "status": "running", "reason": "", "trials": []}  # fmt: skip
+    write_json(state, sc / "up1.5/dichotomy/state1.json")
+    # up2: the window stage failed: every window scheme fails with its status
+    _window(sc / "up2/window.nc", "front_left_window", "front at x = 3.0 sigma")
+    # up2.5: crashed jobs (MW; a dichotomy trial)
+    _window(sc / "up2.5/window.nc")
+    (logs / "up2.5").mkdir(parents=True)
+    (logs / "up2.5/mw.log").write_text("Traceback (most recent call last):\nKeyError: 'u'\n")
+    write_json(state | {"k": 0}, sc / "up2.5/dichotomy/state0.json")
+    (logs / "up2.5/dichotomy_trial0_0.log").write_text(
+        "Traceback (most recent call last):\nhugomap.md.simulation.CheckpointError: refused\n"
+    )
+    # up3: MW not started (an old log from before the window was cut again); the loop ended
+    # without a root
+    (logs / "up3").mkdir(parents=True)
+    (logs / "up3/mw.log").write_text("old\n")
+    _aged(logs / "up3/mw.log", 900)
+    _window(sc / "up3/window.nc")
+    _aged(sc / "up3/window.nc", 600)
+    ended = state | {"k": 6, "done": True, "status": "max_iterations", "reason": "6 iterations"}
+    write_json(ended, sc / "up3/dichotomy/state6.json")
+    # up3.5: a damaged window checkpoint; up4: the window job crashed
+    (sc / "up3.5/window.nc").write_bytes(b"garbage")
+    (logs / "up4").mkdir(parents=True)
+    (logs / "up4/window.log").write_text("Traceback (most recent call last):\nMemoryError\n")
+
+    report = sweep_status(res, cfg, now=NOW)
+    (scene,) = report["scenes"]
+    assert scene["schemes"] == ["piston", "mw", "dichotomy", "amw"]
+    mw, dich, amw = (_by_tag(scene, s) for s in ("mw", "dichotomy", "amw"))
+    assert list(amw) == ["1"] and amw["1"]["in_config"] is False and amw["1"]["state"] == "ok"
+    assert mw["1"]["state"] == "not_converged"
+    assert dich["1"]["state"] == "failed" and dich["1"]["status"] == "bracket_not_found"
+    assert mw["1.5"]["state"] == "running" and mw["1.5"]["log_age_s"] == pytest.approx(60.0)
+    assert dich["1.5"]["state"] == "running" and dich["1.5"]["dichotomy"]["k"] == 1
+    for p in (mw["2"], dich["2"]):
+        assert (p["state"], p["status"]) == ("failed", "front_left_window")
+        assert p["diagnostic"] == "window stage: front at x = 3.0 sigma"
+    assert mw["2.5"]["state"] == "failed"
+    assert mw["2.5"]["diagnostic"] == "job crashed (mw.log): KeyError: 'u'"
+    assert dich["2.5"]["state"] == "failed"
+    assert dich["2.5"]["diagnostic"] == (
+        "job crashed (dichotomy_trial0_0.log): hugomap.md.simulation.CheckpointError: refused"
+    )
+    assert (mw["3"]["state"], mw["3"]["status"]) == ("pending", "window")
+    assert (dich["3"]["state"], dich["3"]["status"]) == ("failed", "max_iterations")
+    assert dich["3"]["diagnostic"] == "6 iterations"
+    assert mw["3.5"]["state"] == "failed" and "unreadable window.nc" in mw["3.5"]["diagnostic"]
+    assert mw["4"]["diagnostic"] == "job crashed (window.log): MemoryError"
+    assert scene["counts_by_scheme"]["mw"] == {
+        "ok": 0, "not_converged": 1, "failed": 4, "running": 1, "pending": 1,
+        "done": 1, "total": 7,
+    }  # fmt: skip
+    assert scene["counts_by_scheme"]["dichotomy"]["failed"] == 6
+    text = format_table(report)
+
+    def row(tag: str, scheme: str) -> str:
+        return next(ln for ln in text.splitlines() if ln.split()[:2] == [tag, scheme])
+
+    assert "7 u_p x 4 schemes: piston, mw, dichotomy, amw" in text
+    assert "started, log written 60 s ago" in row("1.5", "mw")
+    assert "dichotomy k = 1, bracket [-1.2, -0.8]" in row("1.5", "dichotomy")
+    assert "front_left_window: window stage: front at x = 3.0 sigma" in row("2", "mw")
+    assert "window ready; mw run not started" in row("3", "mw")
+    assert "max_iterations: 6 iterations" in row("3", "dichotomy")
+    assert "not in config" in row("1", "amw")
+    # without the config: the schemes come from what is on disk
+    bare = {p["scheme"] for p in sweep_status(res, None, now=NOW)["scenes"][0]["points"]}
+    assert bare == {"piston", "mw", "dichotomy", "amw"}

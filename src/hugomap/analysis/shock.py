@@ -20,7 +20,13 @@ from ..md.profiles import fields_from_sums
 
 
 def front_position(
-    ux: np.ndarray, count: np.ndarray, x_edges: np.ndarray, x_lo: float, x_hi: float
+    ux: np.ndarray,
+    count: np.ndarray,
+    x_edges: np.ndarray,
+    x_lo: float,
+    x_hi: float,
+    u_behind: float | None = None,
+    u_ahead: float | None = None,
 ) -> float:
     """Front position [σ] from one velocity profile by a two-level change-point fit.
 
@@ -28,7 +34,10 @@ def front_position(
     split that best separates two constant levels (largest k (n − k)/n · Δū²) is the rough
     front; within ±3 bins of it the front is refined to sub-bin accuracy by integrating the
     normalised velocity, x_f = x_start + Σ w · clip((u_b − u_a)/(u_s − u_a), 0, 1), with u_s,
-    u_a the two fitted levels. Returns NaN if no split exists.
+    u_a the two fitted levels. Returns NaN if no split exists, or, when the expected flow
+    velocities behind and ahead of the front are given, if either fitted level is off by more
+    than half their difference (a split of noise, e.g. before a weak shock has formed: the
+    first sample of a u_p = 0.5 piston run put a "front" at 63 σ and ended its loading).
     """
     centres = 0.5 * (x_edges[:-1] + x_edges[1:])
     sel = np.nonzero((centres > x_lo) & (centres < x_hi) & (count >= 2) & np.isfinite(ux))[0]
@@ -45,6 +54,10 @@ def front_position(
     us, ua = left[kb], right[kb]
     if us == ua:
         return float("nan")
+    if u_behind is not None and u_ahead is not None:
+        tol = 0.5 * abs(u_behind - u_ahead)
+        if abs(us - u_behind) > tol or abs(ua - u_ahead) > tol:
+            return float("nan")
     lo = max(kb + 1 - 3, 0)
     hi = min(kb + 1 + 3, n)
     w = x_edges[sel + 1] - x_edges[sel]
@@ -152,7 +165,7 @@ def analyse_piston(
     the material shocked first keeps the entropy of the piston's start-up transient — the
     slab ahead of the front [x_f + gap, x_f + gap + avg_length] and the upstream slab
     [x_f + gap, x_R − gap] (whole bins). Then
-      D_w = d x_f/dt (line fit over the drive samples), u_a, u_s = upstream and shocked mean
+      D_w = d x_f/dt (Theil–Sen fit over the drive samples), u_a, u_s = upstream and shocked mean
       x velocities, D = D_w − u_a, u_p = u_s − u_a (both relative to the upstream material),
       ρ, P = P_xx, E = e, T: block averages over the samples of the shocked slab's state.
     When the upstream velocity ``u_upstream`` is known exactly (the piston removes the sample's
@@ -169,7 +182,7 @@ def analyse_piston(
     Converged when every |jump residual| ≤ ``residual_tol`` and the fit has at least
     2·n_blocks samples; ``residual_*_err`` are the residuals' propagated standard errors.
     """
-    from .stats import block_average, line_fit
+    from .stats import block_average, line_fit, robust_slope
 
     drive = h["stage"] == 1
     t = h["t"][drive]
@@ -198,7 +211,9 @@ def analyse_piston(
         upstream_u.append(
             region_state(sums[i], edges, xf[i] + gap, xr[i] - gap, area)["ux"] if ok else np.nan
         )
-    D_w, _, D_w_err, _ = line_fit(t, xf)
+    # Theil–Sen slope (robust to tracker jumps), with the least-squares standard error.
+    _, _, D_w_err, _ = line_fit(t, xf)
+    D_w = robust_slope(t, xf)
     out: dict[str, float | str | bool] = {}
     u_a, u_a_err = block_average(np.asarray(upstream_u), n_blocks)
     u_s, u_s_err = block_average(np.asarray(shocked["ux"]), n_blocks)

@@ -42,3 +42,24 @@ def line_fit(t: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
     b = float(y.mean() - a * tm)
     s2 = float(np.sum((y - a * t - b) ** 2) / (n - 2))
     return a, b, float(np.sqrt(s2 / sxx)), float(np.sqrt(s2 * (1.0 / n + tm**2 / sxx)))
+
+
+def robust_slope(t: np.ndarray, y: np.ndarray, min_separation: float = 0.25) -> float:
+    """Theil–Sen slope: the median of (y_j − y_i)/(t_j − t_i) over the pairs at least
+    ``min_separation`` of the time span apart (Sen, J. Am. Stat. Assoc. 63, 1379 (1968)).
+
+    A front tracker that now and then jumps by a few σ (a weak, broad front; the foot or the
+    top of a two-wave profile) shifts a least-squares slope by a few %; the median ignores
+    such samples. NaN samples are dropped; NaN if fewer than 3 remain."""
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    ok = np.isfinite(t) & np.isfinite(y)
+    t, y = t[ok], y[ok]
+    if t.size < 3:
+        return float("nan")
+    i, j = np.triu_indices(t.size, k=1)
+    dt = t[j] - t[i]
+    far = dt >= min_separation * (t.max() - t.min())
+    if not far.any():
+        return float("nan")
+    return float(np.median((y[j] - y[i])[far] / dt[far]))

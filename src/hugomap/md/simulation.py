@@ -7,6 +7,7 @@ drive it through ``advance``, ``set_walls``, ``galilean_shift``, ``profile_sums`
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -25,7 +26,129 @@ from .neighbor import build_full_list, cell_of, counting_sort, grid_shape
 from .potential import LJParams
 from .profiles import SUM_FIELDS, bin_sums
 
-CHECKPOINT_FORMAT = "hugomap-md-checkpoint/1"
+CHECKPOINT_FORMAT = "hugomap-md-checkpoint/2"  # /2: a SHA-256 checksum (attribute ``checksum``)
+CHECKPOINT_FAMILY = "hugomap-md-checkpoint/"
+UNCHECKED_FORMATS = ("hugomap-md-checkpoint/1",)  # written before checkpoints had checksums
+CHECKSUM_ATTR = "checksum"
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that must not be used: unreadable, foreign, too old, or altered.
+
+    ``source`` names the file (or says the dataset was built in memory), ``problem`` what is
+    wrong with it; the message gives both.
+    """
+
+    def __init__(self, source: str, problem: str):
+        super().__init__(f"refused checkpoint {source}: {problem}")
+        self.source = source
+        self.problem = problem
+
+
+def _canonical_bytes(value: object) -> bytes:
+    """The bytes that stand for an array or attribute value in the checksum.
+
+    Numbers are widened to little-endian float64 / int64 and every NaN is the same NaN, so
+    the bytes do not depend on how netCDF stored the value (an int8 flag array, a 1-element
+    list attribute read back as a scalar, a NaN's payload) but change with any value; text
+    is UTF-8. The kind, shape and length are part of the bytes.
+    """
+    if isinstance(value, str):
+        raw = value.encode()
+        return b"s" + len(raw).to_bytes(8, "little") + raw
+    a = np.asarray(value)
+    if a.dtype.kind in "USO":
+        raw = "\x1f".join(str(x) for x in a.ravel()).encode()
+        head = b"S"
+    elif a.dtype.kind == "f":
+        f = np.ascontiguousarray(a, dtype="<f8")
+        raw = np.where(np.isnan(f), np.nan, f).astype("<f8").tobytes()
+        head = b"f"
+    elif a.dtype.kind in "iub":
+        raw = np.ascontiguousarray(a, dtype="<i8").tobytes()
+        head = b"i"
+    else:
+        raise TypeError(f"cannot checksum values of dtype {a.dtype}")
+    shape = np.asarray(a.shape if a.ndim > 0 else (1,), dtype="<i8").tobytes()
+    return head + len(shape).to_bytes(8, "little") + shape + len(raw).to_bytes(8, "little") + raw
+
+
+def checkpoint_checksum(ds: xr.Dataset) -> str:
+    """SHA-256 (hex) over every variable of a checkpoint (name, kind, shape, values) and every
+    global attribute except ``checksum`` itself, in name order: the state arrays (x, v, f,
+    x_ref, ids, L, periodic, walls0, impulse; res_x, res_v of a window), the extra variables
+    (history, pole) and the attributes (format, clock, time step, potential, thermostat...)."""
+    h = hashlib.sha256()
+    for name in sorted(map(str, ds.variables)):
+        h.update(b"var" + _canonical_bytes(name) + _canonical_bytes(ds[name].values))
+    for name in sorted(k for k in map(str, ds.attrs) if k != CHECKSUM_ATTR):
+        h.update(b"attr" + _canonical_bytes(name) + _canonical_bytes(ds.attrs[name]))
+    return h.hexdigest()
+
+
+def seal_checkpoint(ds: xr.Dataset) -> xr.Dataset:
+    """Set ``ds``'s format version and checksum attributes (in place); return ``ds``.
+
+    Call it last, once every variable and attribute of the checkpoint is in place."""
+    ds.attrs["format"] = CHECKPOINT_FORMAT
+    ds.attrs[CHECKSUM_ATTR] = "sha256:" + checkpoint_checksum(ds)
+    return ds
+
+
+def _source(ds: xr.Dataset, source: str | os.PathLike | None) -> str:
+    if source is not None:
+        return str(source)
+    return str(ds.encoding.get("source", "(in-memory dataset)"))
+
+
+def verify_checkpoint(ds: xr.Dataset, source: str | os.PathLike | None = None) -> None:
+    """Refuse (``CheckpointError``) a dataset that is not an intact checkpoint of this format.
+
+    Foreign (no or another ``format``), older (written before checksums), newer, without a
+    checksum, or whose checksum does not match its contents: edited, truncated, bit-flipped.
+    ``source`` names the file in the message (default: the file ``ds`` was opened from).
+    """
+    where = _source(ds, source)
+    fmt = ds.attrs.get("format")
+    if not isinstance(fmt, str) or not fmt.startswith(CHECKPOINT_FAMILY):
+        raise CheckpointError(where, f"not an MD checkpoint (format {fmt!r})")
+    if fmt in UNCHECKED_FORMATS:
+        raise CheckpointError(
+            where,
+            f"format {fmt!r} predates checkpoint checksums, so it cannot be checked; "
+            "delete it and rerun the stage that wrote it",
+        )
+    if fmt != CHECKPOINT_FORMAT:
+        raise CheckpointError(
+            where, f"unsupported format version {fmt!r} (this hugomap reads {CHECKPOINT_FORMAT!r})"
+        )
+    stored = ds.attrs.get(CHECKSUM_ATTR)
+    if not isinstance(stored, str) or not stored.startswith("sha256:"):
+        raise CheckpointError(where, f"no valid {CHECKSUM_ATTR!r} attribute ({stored!r})")
+    try:
+        actual = "sha256:" + checkpoint_checksum(ds)
+    except (TypeError, ValueError) as exc:
+        raise CheckpointError(where, f"contents cannot be checksummed: {exc}") from exc
+    if actual != stored:
+        raise CheckpointError(
+            where,
+            f"checksum mismatch (stored {stored[:19]}..., contents give {actual[:19]}...): "
+            "the file was altered or corrupted after it was written",
+        )
+
+
+def read_checkpoint(path: str | os.PathLike, verify: bool = True) -> xr.Dataset:
+    """Read a checkpoint file into memory and (``verify``) check it with ``verify_checkpoint``.
+
+    An unreadable file (truncated, not netCDF, missing) is refused with ``CheckpointError``."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            ds.load()
+    except (OSError, ValueError, RuntimeError) as exc:
+        raise CheckpointError(str(path), f"unreadable ({type(exc).__name__}: {exc})") from exc
+    if verify:
+        verify_checkpoint(ds, path)
+    return ds
 
 
 class SolverUnstable(RuntimeError):
@@ -352,20 +475,22 @@ class MDSimulation:
 
     # -- checkpoints -------------------------------------------------------------------------
     def to_dataset(self, extra: xr.Dataset | None = None, attrs: dict | None = None) -> xr.Dataset:
-        """The complete state as an xarray Dataset (see ``save``)."""
+        """The complete state as an xarray Dataset (see ``save``), sealed with its format
+        version and checksum (``seal_checkpoint``). The arrays are copies: the dataset stays
+        the state of this moment while the simulation runs on."""
         s = self.state
         dims = ("atom", "xyz")
         ds = xr.Dataset(
             {
-                "x": (dims, s.x, {"units": "sigma", "long_name": "position"}),
-                "v": (dims, s.v, {"units": "sigma tau^-1", "long_name": "velocity"}),
-                "f": (dims, s.f, {"units": "epsilon sigma^-1", "long_name": "force"}),
-                "x_ref": (dims, s.x_ref, {"units": "sigma", "long_name": "positions at last list build"}),
-                "ids": (("atom",), s.ids, {"units": "1", "long_name": "atom label"}),
-                "L": (("xyz",), s.L, {"units": "sigma", "long_name": "box lengths"}),
+                "x": (dims, s.x.copy(), {"units": "sigma", "long_name": "position"}),
+                "v": (dims, s.v.copy(), {"units": "sigma tau^-1", "long_name": "velocity"}),
+                "f": (dims, s.f.copy(), {"units": "epsilon sigma^-1", "long_name": "force"}),
+                "x_ref": (dims, s.x_ref.copy(), {"units": "sigma", "long_name": "positions at last list build"}),
+                "ids": (("atom",), s.ids.copy(), {"units": "1", "long_name": "atom label"}),
+                "L": (("xyz",), s.L.copy(), {"units": "sigma", "long_name": "box lengths"}),
                 "periodic": (("xyz",), s.periodic.astype(np.int8), {"units": "1", "long_name": "periodic flags"}),
-                "walls0": (("wall_param",), s.walls0, {"units": "sigma, sigma tau^-1", "long_name": "[x_L0, v_L, x_R0, v_R]"}),
-                "impulse": (("wall",), s.impulse, {"units": "m sigma tau^-1", "long_name": "x momentum given by left/right wall"}),
+                "walls0": (("wall_param",), s.walls0.copy(), {"units": "sigma, sigma tau^-1", "long_name": "[x_L0, v_L, x_R0, v_R]"}),
+                "impulse": (("wall",), s.impulse.copy(), {"units": "m sigma tau^-1", "long_name": "x momentum given by left/right wall"}),
             },
             coords={"xyz": ["x", "y", "z"]},
         )  # fmt: skip
@@ -389,23 +514,26 @@ class MDSimulation:
             hugomap_version=__version__,
         )
         ds.attrs.update(attrs or {})
-        return ds
+        return seal_checkpoint(ds)
 
     def save(
         self, path: str | os.PathLike, extra: xr.Dataset | None = None, attrs: dict | None = None
     ) -> Path:
-        """Save the complete state (and ``extra`` variables) to netCDF, atomically."""
+        """Save the complete state (and ``extra`` variables) to netCDF, atomically, with its
+        format version and checksum."""
         return write_netcdf(self.to_dataset(extra, attrs), path)
 
     @classmethod
-    def from_dataset(cls, ds: xr.Dataset) -> MDSimulation:
+    def from_dataset(cls, ds: xr.Dataset, source: str | os.PathLike | None = None) -> MDSimulation:
         """Rebuild a simulation that continues bit-for-bit from a saved state.
 
-        The neighbour list is rebuilt from x_ref (where it was built) without re-sorting, and
-        the saved forces are kept, so the next step is the one the original run would take.
+        The dataset is verified first (``verify_checkpoint``: format version and checksum); a
+        foreign, outdated or altered one raises ``CheckpointError`` naming ``source`` (default:
+        the file ``ds`` was opened from). The neighbour list is rebuilt from x_ref (where it
+        was built) without re-sorting, and the saved forces are kept, so the next step is the
+        one the original run would take.
         """
-        if ds.attrs.get("format") != CHECKPOINT_FORMAT:
-            raise ValueError(f"not an MD checkpoint (format {ds.attrs.get('format')!r})")
+        verify_checkpoint(ds, source)
         state = MDState(
             x=ds["x"].values.copy(), v=ds["v"].values.copy(), L=ds["L"].values.copy(),
             periodic=ds["periodic"].values.astype(bool), walls0=ds["walls0"].values.copy(),
@@ -436,7 +564,6 @@ class MDSimulation:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> MDSimulation:
-        """Load a checkpoint written by ``save``."""
-        with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds.load()
-        return cls.from_dataset(ds)
+        """Load a checkpoint written by ``save`` (refused with ``CheckpointError`` if it is
+        unreadable, foreign, outdated or altered)."""
+        return cls.from_dataset(read_checkpoint(path, verify=False), path)

@@ -47,9 +47,17 @@ import xarray as xr
 from ..io.atomic import write_netcdf
 from .potential import LJParams
 from .sample import fcc_state
-from .simulation import MDSimulation, MDState, SolverUnstable
+from .simulation import (
+    CheckpointError,
+    MDSimulation,
+    MDState,
+    SolverUnstable,
+    read_checkpoint,
+    seal_checkpoint,
+    verify_checkpoint,
+)
 
-WINDOW_FORMAT = "hugomap-md-window/1"
+WINDOW_FORMAT = "hugomap-md-window/2"  # /2: inside a checksummed MD checkpoint (format /2)
 MARGIN = 2.0  # σ of empty box beyond the frozen layers
 
 
@@ -83,23 +91,36 @@ class WindowGeometry:
 def make_reservoir(
     cells_yz: tuple[int, int], rho0: float, T0: float, lj: LJParams, dt: float, seed: int,
     equilibrate_time: float, tau_bath: float = 0.5, n_candidates: int = 40, every: int = 25,
-) -> MDSimulation:  # fmt: skip
-    """The inflow's snapshot: a fully periodic FCC box at (ρ0, T0), as many cells along x as
-    make L_r ≥ 4 (rc + skin), thermostatted (CSVR) for ``equilibrate_time`` [τ].
+) -> tuple[MDSimulation, dict[str, float]]:  # fmt: skip
+    """The inflow's snapshot and the state of the material it feeds in.
 
-    One snapshot of a few hundred atoms carries the canonical fluctuations of its kinetic
-    and potential energy (several %), and every copy repeats them, so the inflow would not be
-    at the scene's state: of ``n_candidates`` snapshots taken every ``every`` steps, the one
-    whose potential energy is closest to the mean is kept, its velocities rescaled to T0."""
+    A fully periodic FCC box at (ρ0, T0), as many cells along x as make L_r ≥ 4 (rc + skin),
+    thermostatted (CSVR) for ``equilibrate_time`` [τ]. One snapshot of a few hundred atoms
+    carries the canonical fluctuations of its kinetic and potential energy (several %), and
+    every copy repeats them: of ``n_candidates`` snapshots taken every ``every`` steps, the
+    one whose potential energy is closest to the mean is kept, its velocities rescaled to T0.
+
+    The returned pole is the inflow material's state, which the window points refer to
+    (not the piston sample's, whose finite size gives it its own energy): ρ0 exact, E0 the
+    snapshot's energy per atom (conserved once released), P0 and Pyy0 the mean stresses of
+    the candidates (NVT at T0, whose mean energy the snapshot has), T0; errors by block
+    averages."""
+    from ..analysis.stats import block_average
+    from .profiles import fields_from_sums
+
     a = (4.0 / rho0) ** (1.0 / 3.0)
     nx = max(2, math.ceil(4.0 * lj.rlist / a))
     state = fcc_state((nx, *cells_yz), rho0, T0, seed, periodic_x=True)
     res = MDSimulation(state, lj, dt, T_bath=T0, tau_bath=tau_bath, seed=seed)
     res.advance(max(1, int(round(equilibrate_time / dt))))
-    snaps = []
+    L = res.state.L
+    snaps, pxx, pyy = [], [], []
     for _ in range(n_candidates):
         res.advance(every)
         _, pe = res.energies()
+        f = fields_from_sums(res.profile_sums(float(L[0])), float(np.prod(L)))
+        pxx.append(float(f["Pxx"][0]))
+        pyy.append(0.5 * float(f["Pyy"][0] + f["Pzz"][0]))
         snaps.append((pe, res.state.x.copy(), res.state.v.copy(), res.state.ids.copy()))
     pes = np.array([sn[0] for sn in snaps])
     _, x, v, ids = snaps[int(np.argmin(np.abs(pes - pes.mean())))]
@@ -107,8 +128,14 @@ def make_reservoir(
     n = v.shape[0]
     v *= math.sqrt(3.0 * (n - 1) * T0 / float(np.sum(v * v)))
     order = np.argsort(ids)
-    st = MDState(x=x[order], v=v[order], L=res.state.L.copy(), periodic=res.state.periodic)
-    return MDSimulation(st, lj, dt)
+    st = MDState(x=x[order], v=v[order], L=L.copy(), periodic=res.state.periodic)
+    snap = MDSimulation(st, lj, dt)
+    ke, pe = snap.energies()
+    pole = {"rho0": n / float(np.prod(L)), "rho0_err": 0.0, "E0": (ke + pe) / n, "E0_err": 0.0,
+            "T0": float(T0), "T0_err": 0.0}  # fmt: skip
+    pole["P0"], pole["P0_err"] = block_average(np.asarray(pxx))
+    pole["Pyy0"], pole["Pyy0_err"] = block_average(np.asarray(pyy))
+    return snap, pole
 
 
 def _phase(x: np.ndarray, period: float) -> float:
@@ -179,8 +206,7 @@ class MDWindow:
         upstream material at −u_p) with the front at ``front_fraction`` of ``length`` from
         the outflow edge, and move to the frame in which a front of speed ``D_guess`` is at
         rest: every velocity gets u_p − D_guess, so u_in = −D_guess, u_out = u_p − D_guess.
-        ``res`` is the equilibrated reservoir (``make_reservoir``); its current state is the
-        snapshot.
+        ``res`` is the reservoir snapshot (``make_reservoir``).
 
         For a crystal (``crystal``), the seam is placed so that the reservoir's lattice planes
         continue the sample's (period a/2 along each axis, ``lattice`` = a)."""
@@ -366,11 +392,12 @@ class MDWindow:
 
     # -- checkpoints ---------------------------------------------------------------------------
     def to_dataset(self, extra: xr.Dataset | None = None, attrs: dict | None = None) -> xr.Dataset:
-        """The complete window state: the domain, the reservoir snapshot, the boundaries."""
+        """The complete window state: the domain, the reservoir snapshot, the boundaries;
+        sealed with the format version and a checksum over all of it (``seal_checkpoint``)."""
         ds = self.sim.to_dataset(extra, attrs)
-        ds["res_x"] = (("res_atom", "xyz"), self.res_x, {"units": "sigma",
+        ds["res_x"] = (("res_atom", "xyz"), self.res_x.copy(), {"units": "sigma",
                        "long_name": "reservoir snapshot positions"})  # fmt: skip
-        ds["res_v"] = (("res_atom", "xyz"), self.res_v, {"units": "sigma tau^-1",
+        ds["res_v"] = (("res_atom", "xyz"), self.res_v.copy(), {"units": "sigma tau^-1",
                        "long_name": "reservoir snapshot thermal velocities"})  # fmt: skip
         ds.attrs.update(
             window_format=WINDOW_FORMAT,
@@ -385,7 +412,7 @@ class MDWindow:
                 }
             ),  # fmt: skip
         )
-        return ds
+        return seal_checkpoint(ds)  # again: the checksum covers the window's part too
 
     def save(
         self, path: str | os.PathLike, extra: xr.Dataset | None = None, attrs: dict | None = None
@@ -394,11 +421,20 @@ class MDWindow:
         return write_netcdf(self.to_dataset(extra, attrs), path)
 
     @classmethod
-    def from_dataset(cls, ds: xr.Dataset) -> MDWindow:
-        """Rebuild a window saved by ``save``."""
+    def from_dataset(cls, ds: xr.Dataset, source: str | os.PathLike | None = None) -> MDWindow:
+        """Rebuild a window saved by ``save``; a foreign, outdated or altered checkpoint is
+        refused with ``CheckpointError`` naming ``source`` (default: the file of ``ds``)."""
+        verify_checkpoint(ds, source)
         if ds.attrs.get("window_format") != WINDOW_FORMAT:
-            raise ValueError(f"not an MD window checkpoint ({ds.attrs.get('window_format')!r})")
-        sim = MDSimulation.from_dataset(ds)
+            where = (
+                source if source is not None else ds.encoding.get("source", "(in-memory dataset)")
+            )
+            raise CheckpointError(
+                str(where),
+                f"not an MD window checkpoint (window_format {ds.attrs.get('window_format')!r},"
+                f" this hugomap reads {WINDOW_FORMAT!r})",
+            )
+        sim = MDSimulation.from_dataset(ds, source)
         geom = WindowGeometry(**json.loads(ds.attrs["window_geometry"]))
         st = json.loads(ds.attrs["window_state"])
         return cls(
@@ -408,10 +444,9 @@ class MDWindow:
 
     @classmethod
     def load_path(cls, path: str | os.PathLike) -> MDWindow:
-        """Load a window checkpoint written by ``save``."""
-        with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds.load()
-        return cls.from_dataset(ds)
+        """Load a window checkpoint written by ``save`` (refused with ``CheckpointError`` if
+        it is unreadable, foreign, outdated or altered)."""
+        return cls.from_dataset(read_checkpoint(path, verify=False), path)
 
 
 def _remove_seam_overlaps(

@@ -102,7 +102,8 @@ def take_sample(solver: ShockSolver, p: PistonParams, history: History, stage: i
     xl, xr = solver.wall_positions()
     edges = np.arange(sums.shape[0] + 1) * p.bin_width
     ux = fields_from_sums(sums, p.area * p.bin_width)["ux"]
-    xf = front_position(ux, sums[:, 0], edges, xl, xr)
+    # Piston frame: shocked material at rest, upstream at −u_p.
+    xf = front_position(ux, sums[:, 0], edges, xl, xr, u_behind=0.0, u_ahead=-p.u_p)
     history.t.append(solver.time)
     history.x_left.append(xl)
     history.x_right.append(xr)
