@@ -12,6 +12,17 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 
+def _cutoff(ds: xr.Dataset, scene: str) -> str:
+    """The scene's LJ cutoff from the resolved config stored in the aggregate."""
+    import json
+
+    try:
+        cfg = json.loads(ds.attrs.get("config_json", "{}"))
+        return f"{cfg['scenes'][scene]['potential']['rc']:g}"
+    except (KeyError, TypeError, ValueError):
+        return "?"
+
+
 def hugoniot_figures(
     agg: str | os.PathLike, out_pv: str | os.PathLike, out_dup: str | os.PathLike
 ) -> None:
@@ -53,7 +64,7 @@ def hugoniot_figures(
             ax.plot([1.0 / float(ds["rho0"])], [float(ds["P0"])], "k*", ms=9, label="pole")
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
-        ax.set_title(f"{scene}: LJ rc = {ds.attrs.get('rc', '')}")
+        ax.set_title(f"{scene}: LJ rc = {_cutoff(ds, scene)} σ")
         ax.legend(fontsize=8)
         fig.tight_layout()
         fig.savefig(out)
