@@ -221,6 +221,28 @@ def _resume_partial(
     return resumed
 
 
+def _log_progress(sim, h, p, x_start: list, wall: float) -> None:
+    """A progress line: step, simulated time, front, fraction of the drive done, ETA.
+
+    The drive ends when the front is ``rear_margin`` from the far wall; the fraction is how
+    much of that gap (front to far wall, both moving) has closed since the first progress
+    line, the ETA that fraction's wall rate."""
+    xf = next((f for f in reversed(h.front) if np.isfinite(f)), float("nan"))
+    if not np.isfinite(xf):
+        return
+    xl, xr = sim.wall_positions()
+    gap = xr - xf - p.rear_margin  # what the front still has to close (the wall comes too)
+    if x_start[0] is None:
+        x_start[0] = (gap, wall)
+    gap0, w0 = x_start[0]
+    done = 1.0 - gap / gap0 if gap0 > 0 else 1.0
+    eta = (wall - w0) * (1.0 - done) / done if done > 0 else float("nan")
+    log.info(
+        "progress: step %d, t = %.3f tau, front %.2f sigma, %.0f %% of the drive, ETA %.0f s",
+        sim.state.step, sim.time, xf, 100.0 * min(max(done, 0.0), 1.0), eta,
+    )  # fmt: skip
+
+
 def piston_point(
     loaded: str | os.PathLike,
     scene: dict,
@@ -259,9 +281,12 @@ def piston_point(
     step0 = sim.state.step
     n_since = [0]
 
+    x_start = [None]
+
     def checkpoint() -> None:
         n_since[0] += 1
         if n_since[0] % sh["checkpoint_every"] == 0:
+            _log_progress(sim, h, p, x_start, time.perf_counter() - t0)
             c = dict(cost)
             c["wall_s"] = c.get("wall_s", 0) + time.perf_counter() - t0
             c["cpu_s"] = c.get("cpu_s", 0) + _cpu() - c0

@@ -23,6 +23,7 @@ amplitude settles to the u_p whose D matches the window.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -30,6 +31,8 @@ import numpy as np
 
 from ..analysis.stats import line_fit
 from ..md.profiles import fields_from_sums
+
+log = logging.getLogger("hugomap")
 
 
 @dataclass
@@ -109,6 +112,10 @@ def sample_omega(solver, signal: OmegaSignal, duration: float, every: int) -> tu
 
 
 def _record(h: ControlHistory, solver, t, w, a, se, du) -> None:
+    log.info(
+        "progress: window %d, t = %.3f, omega %.3f, a = %.3g +- %.2g, u_in %.4f, u_out %.4f",
+        len(h.t) + 1, float(t[-1]), float(np.mean(w)), a, se, solver.u_in, solver.u_out,
+    )  # fmt: skip
     h.t.append(float(t[-1]))
     h.a.append(a)
     h.a_err.append(se)
