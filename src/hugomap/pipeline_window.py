@@ -24,7 +24,7 @@ from .io.dataset import POLE_VARS, point_dataset, scalar_vars
 from .md.profiles import fields_from_sums
 from .md.simulation import MDSimulation, SolverUnstable
 from .md.window import MDWindow, WindowError, make_reservoir
-from .pipeline import _cpu, _history_from, _pole_from
+from .pipeline import _cpu, _failure, _history_from, _pole_from
 from .window import dichotomy as dich
 from .window.methods import ControlHistory, OmegaSignal, amw, fixed_run, mw
 
@@ -53,10 +53,7 @@ def window_start(
         ds.load()
     attrs = {"stage": "window", "u_p": u_p, "scene_config": json.dumps(scene)}
     if ds.attrs.get("status", "ok") != "ok":
-        return write_netcdf(
-            xr.Dataset(attrs={**attrs, "status": ds.attrs["status"],
-                              "diagnostic": ds.attrs.get("diagnostic", "")}), out,
-        )  # fmt: skip
+        return _failure(out, ds.attrs["status"], ds.attrs.get("diagnostic", ""), attrs)
     w, sh, s = scene["window"], scene["shock"], scene["sample"]
     sim = MDSimulation.from_dataset(ds)
     h = _history_from(ds).arrays()
@@ -66,10 +63,9 @@ def window_start(
         a, *_ = line_fit(h["t"], h["front"])
     D_guess = float(a + u_p)
     if not (np.isfinite(D_guess) and D_guess > u_p):
-        return write_netcdf(
-            xr.Dataset(attrs={**attrs, "status": "no_front_speed", "diagnostic":
-                              f"the loading stage gives no front speed ({n} samples)"}), out,
-        )  # fmt: skip
+        return _failure(
+            out, "no_front_speed", f"the loading stage gives no front speed ({n} samples)", attrs
+        )
     res, inflow = make_reservoir(
         (s["cells"][1], s["cells"][2]), s["rho0"], s["T0"], sim.lj, sim.dt, s["seed"] + 7919,
         w["reservoir_equilibrate_time"], s["thermostat_tau"],
@@ -81,17 +77,13 @@ def window_start(
             crystal=scene["phase"] == "crystal", lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0),
         )  # fmt: skip
     except WindowError as exc:
-        return write_netcdf(
-            xr.Dataset(attrs={**attrs, "status": exc.status, "diagnostic": exc.diagnostic}), out
-        )
+        return _failure(out, exc.status, exc.diagnostic, attrs)
     try:
         # Let the set-up transient (new boundaries, the first seam) pass at the guessed D:
         # every scheme branches from this settled state.
         win.advance(int(round(w["settle_time"] / win.dt)))
     except (SolverUnstable, WindowError) as exc:
-        return write_netcdf(
-            xr.Dataset(attrs={**attrs, "status": exc.status, "diagnostic": exc.diagnostic}), out
-        )
+        return _failure(out, exc.status, exc.diagnostic, attrs)
     g, bw = win.geom, sh["bin_width"]
     sums = win.profile_sums(bw)
     edges = np.arange(sums.shape[0] + 1) * bw
@@ -200,16 +192,22 @@ def _control_vars(c: ControlHistory) -> dict:
 def _finish_point(
     out, scheme: str, scene: dict, u_p: float, pole: dict, win: MDWindow, values: dict,
     h: dict | None, control: ControlHistory | None, status: str, diagnostic: str,
-    t0: float, c0: float, step0: int,
+    t0: float, c0: float, step0: int, prior_cost: dict | None = None,
+    extra_vars: dict | None = None,
 ) -> Path:  # fmt: skip
+    """Write a window point; ``prior_cost`` (wall_s, cpu_s, atom_steps of earlier jobs, e.g.
+    the dichotomy's trials) is added to this job's, ``extra_vars`` go into the file as is."""
+    prior = prior_cost or {}
     values = dict(values, piston_velocity=u_p)
-    values["wall_s"] = time.perf_counter() - t0
-    values["cpu_s"] = _cpu() - c0
-    values["atom_steps"] = float(win.n_particles * (win.sim.state.step - step0))
+    values["wall_s"] = time.perf_counter() - t0 + prior.get("wall_s", 0.0)
+    values["cpu_s"] = _cpu() - c0 + prior.get("cpu_s", 0.0)
+    values["atom_steps"] = float(win.n_particles * (win.sim.state.step - step0)) + prior.get(
+        "atom_steps", 0.0
+    )
     hist = None if h is None else {k: h[k] for k in ("t", "front", "stage")}
     ds = point_dataset(values, pole, hist, scheme, scene.get("name", ""), status, diagnostic,
                        scene)  # fmt: skip
-    extra = {}
+    extra = dict(extra_vars or {})
     if h is not None:
         extra.update(_profile_vars(h, scene["shock"]["bin_width"], win.area))
     if control is not None and control.t:
@@ -340,22 +338,12 @@ def dichotomy_point(
                              exc.diagnostic, t0, c0, step0)  # fmt: skip
     status = str(values["status"])
     diagnostic = "" if status == "ok" else _residual_text(values)
-    path = _finish_point(out, scheme, scene, u_p, pole, win, values, h, None, status,
-                         diagnostic, t0, c0, step0)  # fmt: skip
-    # The bisection's trials are part of the point's cost.
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        ds.load()
-    for k in ("wall_s", "cpu_s", "atom_steps"):
-        ds[k] = ds[k] + cost[k]
+    # The bisection's trials are part of the point's cost, and their sequence is kept.
     bis = np.array([[t["u_out"], t.get("slope", np.nan)] for t in s["trials"]], dtype=float)
-    ds["dichotomy_u_out"] = (
-        "trial",
-        bis[:, 0],
-        {"units": "sigma tau^-1", "long_name": "trial u_out"},
-    )
-    ds["dichotomy_slope"] = (
-        "trial",
-        bis[:, 1],
-        {"units": "tau^-1", "long_name": "trial <domega/dt>"},
-    )
-    return write_netcdf(ds, out)
+    trials_vars = {
+        "dichotomy_u_out": ("trial", bis[:, 0], {"units": "sigma tau^-1", "long_name": "trial u_out"}),
+        "dichotomy_slope": ("trial", bis[:, 1], {"units": "tau^-1", "long_name": "trial <domega/dt>"}),
+    }  # fmt: skip
+    return _finish_point(out, scheme, scene, u_p, pole, win, values, h, None, status,
+                         diagnostic, t0, c0, step0, prior_cost=cost,
+                         extra_vars=trials_vars)  # fmt: skip

@@ -135,6 +135,50 @@ def _check_inside(w: np.ndarray, margin: float) -> str | None:
     return None
 
 
+def _control(
+    solver,
+    signal: OmegaSignal,
+    correction: Callable[[float, np.ndarray], float],
+    apply: Callable[[float], None],
+    window_time: float,
+    calm_windows: int,
+    max_windows: int,
+    every: int,
+    z: float,
+    edge_margin: float,
+    history: ControlHistory | None,
+    on_window: Callable[[], None] | None,
+) -> tuple[ControlResult, ControlHistory]:
+    """The loop AMW and MW share: per averaging window, fit ω = a t + b, stop if the front
+    left the window, count the windows with |a| ≤ z s_a, else ``apply(correction(a, ω))``."""
+    h = history or ControlHistory()
+    calm = 0
+    for k in range(max_windows):
+        t, w = sample_omega(solver, signal, window_time, every)
+        a, _, se, _ = line_fit(t, w)
+        bad = _check_inside(w, edge_margin)
+        if bad:
+            _record(h, solver, t, w, a, se, 0.0)
+            return ControlResult(False, "front_left_window", bad, k + 1), h
+        calm = calm + 1 if abs(a) <= z * se else 0
+        du = correction(a, w)
+        _record(h, solver, t, w, a, se, du)
+        if calm >= calm_windows:
+            return ControlResult(True, "ok", "", k + 1), h
+        apply(du)
+        if on_window is not None:
+            on_window()
+    return (
+        ControlResult(
+            False, "never_steady",
+            f"|a_k| > {z} s_k within the last {calm_windows} of {max_windows} windows "
+            f"(last a = {h.a[-1]:.3g} +- {h.a_err[-1]:.2g} 1/time)",
+            max_windows,
+        ),
+        h,
+    )  # fmt: skip
+
+
 def amw(
     solver,
     signal: OmegaSignal,
@@ -149,32 +193,10 @@ def amw(
     on_window: Callable[[], None] | None = None,
 ) -> tuple[ControlResult, ControlHistory]:
     """AMW (module docstring): shift the frame by −β L a_k after each averaging window."""
-    h = history or ControlHistory()
     L = solver.geom.length
-    calm = 0
-    for k in range(max_windows):
-        t, w = sample_omega(solver, signal, window_time, every)
-        a, _, se, _ = line_fit(t, w)
-        bad = _check_inside(w, edge_margin)
-        if bad:
-            _record(h, solver, t, w, a, se, 0.0)
-            return ControlResult(False, "front_left_window", bad, k + 1), h
-        calm = calm + 1 if abs(a) <= z * se else 0
-        du = -beta * L * a
-        _record(h, solver, t, w, a, se, du)
-        if calm >= calm_windows:
-            return ControlResult(True, "ok", "", k + 1), h
-        solver.galilean_shift(du)
-        if on_window is not None:
-            on_window()
-    return (
-        ControlResult(
-            False, "never_steady",
-            f"|a_k| > {z} s_k within the last {calm_windows} of {max_windows} windows "
-            f"(last a = {h.a[-1]:.3g} +- {h.a_err[-1]:.2g} 1/time)",
-            max_windows,
-        ),
-        h,
+    return _control(
+        solver, signal, lambda a, w: -beta * L * a, solver.galilean_shift, window_time,
+        calm_windows, max_windows, every, z, edge_margin, history, on_window,
     )  # fmt: skip
 
 
@@ -194,31 +216,14 @@ def mw(
     on_window: Callable[[], None] | None = None,
 ) -> tuple[ControlResult, ControlHistory]:
     """MW (module docstring): the inflow is held and u_out is steered."""
-    h = history or ControlHistory()
     L = solver.geom.length
-    calm = 0
-    for k in range(max_windows):
-        t, w = sample_omega(solver, signal, window_time, every)
-        a, _, se, _ = line_fit(t, w)
-        bad = _check_inside(w, edge_margin)
-        if bad:
-            _record(h, solver, t, w, a, se, 0.0)
-            return ControlResult(False, "front_left_window", bad, k + 1), h
-        calm = calm + 1 if abs(a) <= z * se else 0
-        du = -gain_rate * L * a - gain_position * L * (float(np.mean(w)) - target)
-        _record(h, solver, t, w, a, se, du)
-        if calm >= calm_windows:
-            return ControlResult(True, "ok", "", k + 1), h
-        solver.set_outflow(solver.u_out + du)
-        if on_window is not None:
-            on_window()
-    return (
-        ControlResult(
-            False, "never_steady",
-            f"|a_k| > {z} s_k within the last {calm_windows} of {max_windows} windows",
-            max_windows,
-        ),
-        h,
+
+    def correction(a: float, w: np.ndarray) -> float:
+        return -gain_rate * L * a - gain_position * L * (float(np.mean(w)) - target)
+
+    return _control(
+        solver, signal, correction, lambda du: solver.set_outflow(solver.u_out + du),
+        window_time, calm_windows, max_windows, every, z, edge_margin, history, on_window,
     )  # fmt: skip
 
 
