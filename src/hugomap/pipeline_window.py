@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from .analysis.shock import analyse_piston, front_position, region_state
-from .analysis.stats import line_fit
+from .analysis.stats import CorrelatedSlope, line_fit
 from .io.atomic import write_json, write_netcdf
 from .io.dataset import POLE_VARS, point_dataset, scalar_vars
 from .md.profiles import fields_from_sums
@@ -66,10 +66,20 @@ def window_start(
         return _failure(
             out, "no_front_speed", f"the loading stage gives no front speed ({n} samples)", attrs
         )
-    res, inflow = make_reservoir(
-        (s["cells"][1], s["cells"][2]), s["rho0"], s["T0"], sim.lj, sim.dt, s["seed"] + 7919,
-        w["reservoir_equilibrate_time"], s["thermostat_tau"],
-    )  # fmt: skip
+    # A fluid's inflow is made at the piston sample's measured (ρ0, E0), so both schemes
+    # share one pole; a crystal's keeps the nominal lattice (the seam needs its registry)
+    # and T0, its energy set by the lattice.
+    piston_pole = _pole_from(ds)
+    fluid = scene["phase"] != "crystal"
+    try:
+        res, inflow = make_reservoir(
+            (s["cells"][1], s["cells"][2]), piston_pole["rho0"] if fluid else s["rho0"],
+            s["T0"], sim.lj, sim.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"],
+            s["thermostat_tau"], E0_target=piston_pole["E0"] if fluid else None,
+        )  # fmt: skip
+    except WindowError as exc:
+        return _failure(out, exc.status, exc.diagnostic, attrs)
+    log.info("inflow pole: %s", json.dumps(inflow))
     try:
         win = MDWindow.from_piston(
             sim, res, float(h["front"][-1]), u_p, D_guess, w["length"], w["front_fraction"],
@@ -92,15 +102,19 @@ def window_start(
     if not np.isfinite(x_f):
         x_f = g.x_lo + w["front_fraction"] * g.length
     shocked = region_state(sums, edges, g.x_lo + 0.5 * sh["gap"], x_f - 0.5 * sh["gap"], win.area)
-    upstream = {"n": inflow["rho0"], "Pxx": inflow["P0"]}
+    # The window's pole is the inflow material's state. For a fluid that is the piston
+    # sample's (ρ0, E0), so the sample's more precise P0, T0 are kept; the inflow's own
+    # measurement (a ~1000-atom box over 2 τ) is stored beside them as a check.
+    pole = piston_pole if fluid else inflow
+    upstream = {"n": pole["rho0"], "Pxx": pole["P0"]}
     sig = OmegaSignal.from_states(w["omega"], g.length, win.area, upstream, shocked, bw)
-    # The window's pole is the inflow material's state (md.window.make_reservoir).
-    extra = xr.Dataset(scalar_vars(inflow, POLE_VARS))
+    extra = xr.Dataset(scalar_vars(pole, POLE_VARS))
     return win.save(
         out,
         extra=extra,
         attrs={
             **attrs, "status": "ok", "D_guess": D_guess,
+            **{f"inflow_{k}": v for k, v in inflow.items()},
             "omega_signal": json.dumps({"kind": sig.kind, "q_up": sig.q_up, "q_sh": sig.q_sh,
                                         "bin_width": sig.bin_width}),
         },
@@ -118,7 +132,7 @@ def _open(path: str | os.PathLike) -> tuple[MDWindow, OmegaSignal, dict, xr.Data
 
 
 def steady_state(
-    win: MDWindow, scene: dict, pole: dict, duration: float
+    win: MDWindow, scene: dict, pole: dict, duration: float, signal: OmegaSignal
 ) -> tuple[dict, dict, dict]:
     """Average the steady wave in the window frame for ``duration`` [τ] (the frame held).
 
@@ -126,20 +140,26 @@ def steady_state(
     then ``analysis.shock.analyse_piston`` with the window edges as the boundaries, the
     upstream velocity u_in and the downstream u_out known exactly: D = L dω/dt-like front
     drift − u_in, u_p = u_out − u_in; ``pole`` is the inflow material's state (saved in the
-    window checkpoint). Returns the point values, the profile history and that pole."""
+    window checkpoint). The front's drift is L dω/dt over the whole average (ω from
+    ``signal``, error corrected for correlated samples): the window's mass balance, which
+    stays sharp for a broad weak front where the change-point tracker wanders (at u_p = 0.5
+    the tracker gave D 4 % low while ω was flat); the tracker's D is kept as ``D_front``.
+    Returns the point values, the profile history and that pole."""
     sh, w = scene["shock"], scene["window"]
     bw, every = sh["bin_width"], w["sample_every"]
     g = win.geom
     n = max(16, int(round(duration / (every * win.dt))))
-    t, front, sums_all = [], [], []
+    t, front, sums_all, omega = [], [], [], []
     for _ in range(n):
         win.advance(every)
+        omega.append(signal(win))
         sums = win.profile_sums(bw)
         edges = np.arange(sums.shape[0] + 1) * bw
         ux = fields_from_sums(sums, win.area * bw)["ux"]
         t.append(win.time)
         front.append(front_position(ux, sums[:, 0], edges, g.x_lo, g.x_hi, win.u_out, win.u_in))
         sums_all.append(sums)
+    a, se, _ = CorrelatedSlope().fit(np.asarray(t), np.asarray(omega))
     h = {
         "t": np.asarray(t), "front": np.asarray(front), "stage": np.ones(n, dtype=np.int8),
         "x_left": np.full(n, g.x_lo), "x_right": np.full(n, g.x_hi), "sums": np.asarray(sums_all),
@@ -147,7 +167,9 @@ def steady_state(
     r = analyse_piston(
         h, pole, win.area, bw, sh["gap"], residual_tol=sh["residual_tol"],
         avg_length=sh["avg_length"], u_upstream=win.u_in, u_piston=win.u_out,
+        front_speed=(g.length * a, g.length * se),
     )  # fmt: skip
+    r["omega_drift"], r["omega_drift_err"] = g.length * a, g.length * se
     # u_p = u_out − u_in is what the boundaries impose; u_p_measured (u_s − u_a) checks it.
     r["u_p_set"] = r.pop("u_p")
     r.pop("u_p_err")
@@ -231,6 +253,7 @@ def control_point(
     common = dict(
         window_time=w["window_time"], calm_windows=w["calm_windows"],
         max_windows=w["max_windows"], every=w["sample_every"], z=w["z"],
+        max_drift=w["drift_fraction"] * win.geom.length / w["average_time"],
     )  # fmt: skip
     try:
         if scheme == "amw":
@@ -243,7 +266,7 @@ def control_point(
         if not result.converged:
             return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, hist,
                                  result.status, result.diagnostic, t0, c0, step0)  # fmt: skip
-        values, h, pole = steady_state(win, scene, pole, w["average_time"])
+        values, h, pole = steady_state(win, scene, pole, w["average_time"], sig)
     except (SolverUnstable, WindowError) as exc:
         return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, None, exc.status,
                              exc.diagnostic, t0, c0, step0)  # fmt: skip
@@ -326,13 +349,15 @@ def dichotomy_point(
         return _failed(out, scheme, scene, s["status"], s["reason"],
                        {"piston_velocity": u_p, **cost})  # fmt: skip
     try:
-        win, _, pole, _ = _open(window0)
+        win, sig, pole, _ = _open(window0)
     except WindowError as exc:
         return _failed(out, scheme, scene, exc.status, exc.diagnostic, {"piston_velocity": u_p})
     win.galilean_shift(float(s["u_out"]) - win.u_out)
     step0 = win.sim.state.step
     try:
-        values, h, pole = steady_state(win, scene, pole, scene["window"]["dichotomy"]["final_time"])
+        values, h, pole = steady_state(
+            win, scene, pole, scene["window"]["dichotomy"]["final_time"], sig
+        )
     except (SolverUnstable, WindowError) as exc:
         return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, None, exc.status,
                              exc.diagnostic, t0, c0, step0)  # fmt: skip

@@ -156,8 +156,14 @@ def analyse_piston(
     u_piston: float | None = None,
     precursor_sigmas: float = 5.0,
     precursor_fraction: float = 0.03,
+    front_speed: tuple[float, float] | None = None,
 ) -> dict[str, float | str | bool]:
     """One Hugoniot point from the drive-stage samples of a piston run.
+
+    ``front_speed`` (speed, standard error) in the samples' frame replaces the tracked
+    front's slope in D when given (a moving window's L dω/dt: the mass balance of the whole
+    window, which a broad weak front does not blur); the tracked slope is then kept as
+    ``D_front`` as a check.
 
     ``h`` holds the history arrays of ``window.piston.History``; ``pole`` the initial state
     (rho0, P0, E0 and their errors). For each drive sample, the shocked slab is
@@ -215,6 +221,9 @@ def analyse_piston(
     _, _, D_w_err, _ = line_fit(t, xf)
     D_w = robust_slope(t, xf)
     out: dict[str, float | str | bool] = {}
+    if front_speed is not None:
+        out["D_front"], out["D_front_err"] = D_w - (u_upstream or 0.0), D_w_err
+        D_w, D_w_err = front_speed
     u_a, u_a_err = block_average(np.asarray(upstream_u), n_blocks)
     u_s, u_s_err = block_average(np.asarray(shocked["ux"]), n_blocks)
     out["u_p_measured"], out["u_p_measured_err"] = u_s - u_a, float(np.hypot(u_s_err, u_a_err))

@@ -23,6 +23,8 @@ from ..config import config_hash
 P_UNIT = "epsilon sigma^-3"
 POINT_VARS: dict[str, tuple[str, str]] = {
     "D": ("sigma tau^-1", "shock velocity relative to the upstream material"),
+    "D_front": ("sigma tau^-1", "window points: D from the change-point front tracker (check)"),
+    "omega_drift": ("sigma tau^-1", "window points: front drift L d(omega)/dt while averaged"),
     "u_p_measured": ("sigma tau^-1", "measured particle-velocity jump across the front"),
     "u_p_set": ("sigma tau^-1", "particle-velocity jump set by the window, u_out - u_in"),
     "rho": ("sigma^-3", "number density behind the front"),

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.stats import line_fit
+from ..analysis.stats import CorrelatedSlope
 from ..md.profiles import fields_from_sums
 
 log = logging.getLogger("hugomap")
@@ -135,6 +135,42 @@ def _check_inside(w: np.ndarray, margin: float) -> str | None:
     return None
 
 
+def _diverging(h: ControlHistory, z: float) -> tuple[str, str] | None:
+    """Failure read from the slopes a_k that are significant (|a_k| > z s_k).
+
+    A correction of gain g multiplies the front speed by (1 − g) per window (AMW: g = β),
+    so over-correction shows as slopes of alternating sign:
+    - diverged: the last 3 alternate and each is at least 1.3 times the one before (g > 2);
+    - oscillating: the signs have changed at least 3 times (4 lobes) and the last lobe's
+      peak |a| is at least 0.7 of the peak one period (two lobes) earlier: an oscillation
+      that does not decay (AMW's β = 2; an MW whose gains and response delay ring).
+    AMW with β ∈ (1, 2) overshoots but decays (|1 − β| < 1) and is not flagged."""
+    a, se = np.asarray(h.a), np.asarray(h.a_err)
+    significant = np.abs(a) > z * se
+    sig = a[significant]
+    if a.size >= 3 and significant[-3:].all():
+        x = a[-3:]
+        if np.all(x[1:] * x[:-1] < 0) and np.all(np.abs(x[1:]) >= 1.3 * np.abs(x[:-1])):
+            return "diverged", (
+                f"a_k alternates in sign and grows ({', '.join(f'{v:.3g}' for v in x)}): "
+                "correction gain too large"
+            )
+    lobes: list[float] = []  # peak |a| of each run of significant slopes of one sign
+    last = 0.0
+    for v in sig:
+        if v * last > 0:
+            lobes[-1] = max(lobes[-1], abs(v))
+        else:
+            lobes.append(abs(v))
+        last = v
+    if len(lobes) >= 4 and lobes[-1] >= 0.7 * lobes[-3]:
+        return "oscillating", (
+            f"the front speed oscillates without decaying ({len(lobes) - 1} sign changes of "
+            f"a_k; peaks {', '.join(f'{v:.3g}' for v in lobes[-4:])}): gains too large"
+        )
+    return None
+
+
 def _control(
     solver,
     signal: OmegaSignal,
@@ -148,23 +184,46 @@ def _control(
     edge_margin: float,
     history: ControlHistory | None,
     on_window: Callable[[], None] | None,
+    max_drift: float | None = None,
 ) -> tuple[ControlResult, ControlHistory]:
-    """The loop AMW and MW share: per averaging window, fit ω = a t + b, stop if the front
-    left the window, count the windows with |a| ≤ z s_a, else ``apply(correction(a, ω))``."""
+    """The loop AMW and MW share: per averaging window, fit ω = a t + b (slope error
+    corrected for correlated samples, ``stats.CorrelatedSlope``), stop if the front left the
+    window or the slopes diverge or oscillate, count the windows with |a| ≤ z s_a, else
+    ``apply(correction(a, ω))``.
+
+    ``max_drift`` [velocity]: the front-speed resolution z s_a L a calm window must reach.
+    A window whose slope is 'zero' only because its error is huge proves nothing; when
+    ``calm_windows`` windows in a row are calm by the slope test but coarser than
+    ``max_drift``, the run stops as ``too_noisy`` (a longer averaging window is needed)."""
     h = history or ControlHistory()
-    calm = 0
+    L = solver.geom.length
+    calm = coarse = 0
+    slopes = CorrelatedSlope()
     for k in range(max_windows):
         t, w = sample_omega(solver, signal, window_time, every)
-        a, _, se, _ = line_fit(t, w)
+        a, se, _ = slopes.fit(t, w)
         bad = _check_inside(w, edge_margin)
         if bad:
             _record(h, solver, t, w, a, se, 0.0)
             return ControlResult(False, "front_left_window", bad, k + 1), h
-        calm = calm + 1 if abs(a) <= z * se else 0
+        still = abs(a) <= z * se
+        fine = max_drift is None or z * se * L <= max_drift
+        calm = calm + 1 if still and fine else 0
+        coarse = coarse + 1 if still and not fine else 0
         du = correction(a, w)
         _record(h, solver, t, w, a, se, du)
         if calm >= calm_windows:
             return ControlResult(True, "ok", "", k + 1), h
+        if coarse >= calm_windows:
+            return ControlResult(
+                False, "too_noisy",
+                f"the front-speed resolution z s_k L = {z * se * L:.3g} exceeds the allowed "
+                f"drift speed {max_drift:.3g} in {coarse} windows: lengthen window_time",
+                k + 1,
+            ), h  # fmt: skip
+        failed = _diverging(h, z)
+        if failed:
+            return ControlResult(False, failed[0], failed[1], k + 1), h
         apply(du)
         if on_window is not None:
             on_window()
@@ -191,12 +250,13 @@ def amw(
     edge_margin: float = 0.05,
     history: ControlHistory | None = None,
     on_window: Callable[[], None] | None = None,
+    max_drift: float | None = None,
 ) -> tuple[ControlResult, ControlHistory]:
     """AMW (module docstring): shift the frame by −β L a_k after each averaging window."""
     L = solver.geom.length
     return _control(
         solver, signal, lambda a, w: -beta * L * a, solver.galilean_shift, window_time,
-        calm_windows, max_windows, every, z, edge_margin, history, on_window,
+        calm_windows, max_windows, every, z, edge_margin, history, on_window, max_drift,
     )  # fmt: skip
 
 
@@ -214,6 +274,7 @@ def mw(
     edge_margin: float = 0.05,
     history: ControlHistory | None = None,
     on_window: Callable[[], None] | None = None,
+    max_drift: float | None = None,
 ) -> tuple[ControlResult, ControlHistory]:
     """MW (module docstring): the inflow is held and u_out is steered."""
     L = solver.geom.length
@@ -224,6 +285,7 @@ def mw(
     return _control(
         solver, signal, correction, lambda du: solver.set_outflow(solver.u_out + du),
         window_time, calm_windows, max_windows, every, z, edge_margin, history, on_window,
+        max_drift,
     )  # fmt: skip
 
 
@@ -233,7 +295,7 @@ def fixed_run(
     """One dichotomy trial: run at the current (u_in, u_out), fit ω(t); return ⟨dω/dt⟩ with
     its standard error, the front speed in the window frame L⟨dω/dt⟩, and a status."""
     t, w = sample_omega(solver, signal, duration, every)
-    a, b, se, _ = line_fit(t, w)
+    a, se, _ = CorrelatedSlope().fit(t, w)
     bad = _check_inside(w, edge_margin)
     L = solver.geom.length
     return {
