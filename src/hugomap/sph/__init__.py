@@ -1,0 +1,1 @@
+"""Contact SPH (CSPH) solver for solids with strength."""
