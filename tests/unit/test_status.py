@@ -398,3 +398,29 @@ def test_window_schemes(tmp_path: Path) -> None:
     # without the config: the schemes come from what is on disk
     bare = {p["scheme"] for p in sweep_status(res, None, now=NOW)["scenes"][0]["points"]}
     assert bare == {"piston", "mw", "dichotomy", "amw"}
+
+
+def test_every_failure_status_the_code_emits_is_registered():
+    """Each status a stage can end with (the first argument of WindowError, SolverUnstable,
+    StageFailed, a failed ControlResult, a dichotomy _finish) has a cause in
+    ``status.FAILURES``: the failure labels of the stability map cannot miss one."""
+    import re
+
+    from hugomap.status import FAILURES
+
+    src = Path(__file__).resolve().parents[2] / "src" / "hugomap"
+    pattern = re.compile(
+        r"(?:WindowError|SolverUnstable|StageFailed|ControlResult\(\s*False,|_finish\(\s*s,)"
+        r"\(?\s*\"([a-z_]+)\""
+    )
+    found = set()
+    for f in src.rglob("*.py"):
+        found.update(pattern.findall(f.read_text()))
+    found.update(
+        re.findall(r'return "(diverged|oscillating)"', (src / "window" / "methods.py").read_text())
+    )
+    from hugomap.md.integrate import STATUS_NAMES
+
+    found.update(v for v in STATUS_NAMES.values() if v not in ("ok", "grow"))
+    assert {"nan", "never_steady", "too_noisy", "bracket_not_found", "oscillating"} <= found
+    assert found - {"ok"} <= set(FAILURES), found - set(FAILURES)

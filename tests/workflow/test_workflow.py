@@ -16,6 +16,8 @@ from pathlib import Path
 import pytest
 import xarray as xr
 
+from hugomap.status import FAILURES
+
 ROOT = Path(__file__).resolve().parents[2]
 TINY = ROOT / "tests" / "workflow" / "tiny" / "config.yaml"
 
@@ -48,9 +50,7 @@ def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
         assert set(piston["status"].values) <= {"ok", "not_converged"}
         assert (piston["P"] > ds["P0"]).all()  # a shock compresses
         # The window schemes on this tiny scene may fail, but only with a named reason.
-        known = {"ok", "not_converged", "never_steady", "front_left_window",
-                 "bracket_not_found", "max_iterations", "sample_too_short", "no_front_speed",
-                 "outflow_reversed", "too_few_samples", "nan", "cfl", "atom_lost"}  # fmt: skip
+        known = {"ok", "not_converged", *FAILURES}
         for s in ("amw", "dichotomy"):
             st = ds.sel({"scheme": s})
             for status, diag, P in zip(st["status"].values, st["diagnostic"].values,
