@@ -147,8 +147,16 @@ def main() -> None:
             point = pipeline.piston_point(loaded, scene, U_P, d / f"piston{nx}.nc")
             with xr.open_dataset(point) as ds:
                 t = ds["history_t"].values
-            row = _row(point, "piston", {"cells_x": nx, "sim_time": float(t[-1] - t[0]),
-                                         "load_cpu_s": load_cost["cpu_s"], "t_load": t_load})
+            row = _row(
+                point,
+                "piston",
+                {
+                    "cells_x": nx,
+                    "sim_time": float(t[-1] - t[0]),
+                    "load_cpu_s": load_cost["cpu_s"],
+                    "t_load": t_load,
+                },
+            )
             _emit(row, rows)  # fmt: skip
             if nx == 80:
                 loaded80 = loaded
@@ -166,7 +174,7 @@ def main() -> None:
                     t_end = float(ds["history_t"].values[-1]) if "history_t" in ds else np.nan
                 _emit(_row(p, scheme, {"average_time": avg, "sim_time": t_end - t_w0}), rows)
         # The dichotomy: its loop once (the trials), then the final average at the root.
-        k, state, trials = 0, None, []
+        k, trials = 0, []
         st = pipeline_window.dichotomy_state(w0, scene, 0, None, [], d / "state0.json")
         while not json.loads(Path(st).read_text())["done"]:
             pending = json.loads(Path(st).read_text())["pending"]
