@@ -1,0 +1,767 @@
+"""The CSPH simulation: time loop, walls (piston), neighbour lists and blow-up checks (SI).
+
+``CSPHSimulation`` owns an ``SPHState`` and advances it with the seed's explicit scheme
+(``csph`` module: pair sums, Δt formula, density exp(−μ̇Δt), kinetic correction of the energy,
+stress rotation and radial return). Geometry: positions along x are bounded by optional rigid
+walls (``walls`` = [x_L, u_L, x_R, u_R]; a wall that is None is absent, so that end is a free
+surface); each dimension may instead be periodic on [lo, lo + length). 1D runs are uniaxial
+strain, 2D runs plane strain (per metre of depth).
+
+A piston is a wall moving into the material: in the lab frame (material at rest) the left wall
+moves at u_L = u_p. Walls are free-slip and act through mirror ghosts (``csph.fill_ghosts``).
+
+Blow-up checks (``SPHUnstable``, a ``SolverUnstable`` with ``status`` and ``diagnostic``):
+``nan`` (a non-finite state), ``eos_range`` (ρ beyond the EOS cap), ``particle_lost`` (a
+particle behind a wall or farther than ``escape_distance`` from the initial extent),
+``dt_collapse`` (Δt below ``dt_floor`` × the first step's Δt).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+import xarray as xr
+
+from ..eos import EOS
+from ..eos.mie_gruneisen import ETA_MAX_FRACTION
+from ..io.atomic import write_netcdf
+from ..md.simulation import CheckpointError, SolverUnstable, checkpoint_checksum
+from ..strength import Strength, hydrodynamic
+from . import csph
+from .neighbors import build_list, cell_grid, sort_by_cell
+from .state import SPHState
+
+#: Below this many particles the parallel kernels run on one thread: a step of a small (1D)
+#: system is shorter than waking the other threads (on a shared 2-core machine: 2000-particle
+#: 1D runs took 3× longer on two threads than on one). Results do not depend on the thread
+#: count (the pair sums are per row), so switching is safe.
+SERIAL_BELOW = 8192
+
+
+@contextmanager
+def _threads_for(n: int):
+    try:
+        before = numba.get_num_threads()
+    except Exception:  # pragma: no cover - numba without a threading layer
+        before = 1
+    if n >= SERIAL_BELOW or before == 1:
+        yield
+        return
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)
+
+
+def profile_fields(sums: np.ndarray) -> dict[str, np.ndarray]:
+    """Per-bin means from ``profile_sums`` (columns ``csph.PROFILE_FIELDS``; NaN in empty
+    bins): count, ρ = Σm/ΣV [kg/m³], u = Σ m v_x/Σm [m/s], σ_xx, σ_yy = ΣVσ/ΣV and
+    P = ΣVP/ΣV [Pa] (volume averages: the stress a slab carries), e = Σ m e/Σm [J/kg],
+    eps_p = Σ m ε_p/Σm, and the mass per bin [kg/m² in 1D, kg/m in 2D]."""
+    s = np.asarray(sums, dtype=np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        m, vol = s[:, 1], s[:, 2]
+        return {
+            "count": s[:, 0], "mass": m, "rho": m / vol, "u": s[:, 3] / m,
+            "sxx": s[:, 6] / vol, "syy": s[:, 7] / vol, "P": s[:, 8] / vol,
+            "e": s[:, 5] / m, "eps_p": s[:, 9] / m,
+        }  # fmt: skip
+
+
+class SPHUnstable(SolverUnstable):
+    """The CSPH run stopped: ``status`` (nan, eos_range, particle_lost, dt_collapse) and
+    ``diagnostic`` (where and how)."""
+
+
+class CSPHSimulation:
+    """A CSPH run (module docstring).
+
+    Parameters: ``state``; ``eos``, ``strength`` (default: none); ``theta`` (h_ij = θ(l_i + l_j));
+    ``cfl`` (C of the Δt formula); ``k_comp`` (the Δt compression factor, 16 as printed in the
+    seed; 0 drops the term); ``walls`` [x_L, u_L, x_R, u_R] with None for an absent wall;
+    ``periodic`` per dimension (x, y) with ``lo``/``length`` of the periodic box;
+    ``grad_correction``, ``dev_mean`` (see ``csph``); ``skin`` (neighbour-list skin in units of l_max);
+    ``dt_floor``, ``escape_distance`` (m; default 100 l_max) for the blow-up checks.
+    """
+
+    def __init__(
+        self,
+        state: SPHState,
+        eos: EOS,
+        strength: Strength | None = None,
+        *,
+        theta: float = 0.6,
+        cfl: float = 0.3,
+        k_comp: float = 16.0,
+        walls: tuple[float | None, float, float | None, float] = (None, 0.0, None, 0.0),
+        periodic: tuple[bool, bool] = (False, False),
+        lo: tuple[float, float] = (0.0, 0.0),
+        length: tuple[float, float] = (1.0, 1.0),
+        grad_correction: bool = True,
+        dev_mean: bool = False,
+        skin: float = 0.5,
+        dt_floor: float = 1e-3,
+        escape_distance: float | None = None,
+    ):
+        self.state = state
+        self.eos = eos
+        self.strength = strength if strength is not None else hydrodynamic()
+        if not 0.0 < theta <= 2.0:
+            raise ValueError(f"theta must be in (0, 2], got {theta}")
+        if not 0.0 < cfl <= 1.0:
+            raise ValueError(f"cfl must be in (0, 1], got {cfl}")
+        self.theta = float(theta)
+        self.cfl = float(cfl)
+        self.k_comp = float(k_comp)
+        self.has_wall = np.array([walls[0] is not None, walls[2] is not None])
+        self.walls = np.array(
+            [walls[0] or 0.0, walls[1], walls[2] or 0.0, walls[3]], dtype=np.float64
+        )
+        self.periodic = np.array(periodic, dtype=np.bool_)
+        if state.dim == 1:
+            self.periodic[1] = False
+        if self.periodic[0] and self.has_wall.any():
+            raise ValueError("a periodic x dimension cannot have walls")
+        self.lo = np.array(lo, dtype=np.float64)
+        self.length = np.array(length, dtype=np.float64)
+        self.grad_correction = bool(grad_correction)
+        self.dev_mean = bool(dev_mean)
+        self.skin = float(skin)
+        self.dt_floor = float(dt_floor)
+        n = state.n
+        self.pressure = np.zeros(n)
+        self.rates = np.zeros((n, csph.NRATE))
+        self.dt = 0.0
+        self.dt0 = 0.0
+        self.steps = 0
+        self.n_builds = 0
+        if eos.name == "mie_gruneisen":
+            rho0, s = eos.params[0], eos.params[2]
+            self.rho_max = float(rho0 / (1.0 - ETA_MAX_FRACTION / s))
+        else:
+            self.rho_max = math.inf
+        lmax = float(state.l.max())
+        self.escape = float(escape_distance) if escape_distance else 100.0 * lmax
+        self.extent = (float(state.x[:, 0].min()), float(state.x[:, 0].max()))
+        self._nbr = np.zeros((n, 8), dtype=np.int32)
+        self._nnb = np.zeros(n, dtype=np.int32)
+        self._x_ref = state.x.copy()
+        self._walls_ref = self.walls.copy()
+        self._rlist = 0.0
+        self._src = np.zeros(0, dtype=np.int64)
+        self._side = np.zeros(0, dtype=np.int64)
+        self._pk = np.zeros((n, csph.NPACK))
+        #: particles moved rigidly at ``frozen_velocity`` and held at ``frozen_state``
+        #: (ρ, e, l) with S = 0 (the window's inflow); None: all mobile
+        self.frozen: np.ndarray | None = None
+        self.frozen_velocity = 0.0
+        self.frozen_state = (0.0, 0.0, 0.0)
+        self._build()
+
+    # -- protocol-like accessors -------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        return self.state.time
+
+    @property
+    def n_particles(self) -> int:
+        return self.state.n
+
+    def wall_positions(self) -> tuple[float, float]:
+        return float(self.walls[0]), float(self.walls[2])
+
+    def set_walls(self, v_left: float, v_right: float) -> None:
+        self.walls[1] = v_left
+        self.walls[3] = v_right
+
+    def mean_velocity(self) -> float:
+        st = self.state
+        return float(np.sum(st.m * st.v[:, 0]) / np.sum(st.m))
+
+    # -- neighbour list ----------------------------------------------------------------------
+    def _cut(self) -> float:
+        return 2.0 * self.theta * 2.0 * float(self.state.l.max())
+
+    def _build(self) -> None:
+        st = self.state
+        n = st.n
+        lmax = float(st.l.max())
+        self._rlist = self._cut() + self.skin * lmax
+        for d in range(2):
+            if self.periodic[d] and self.length[d] < 2.0 * self._rlist:
+                raise ValueError(
+                    f"periodic length {self.length[d]:.4g} m along {'xy'[d]} is shorter than "
+                    f"twice the neighbour-list radius {self._rlist:.4g} m: a pair would meet "
+                    "two images of the same particle (minimum image fails); use more rows"
+                )
+        src, side = [], []
+        xs = st.x[:, 0]
+        for k in range(2):
+            if self.has_wall[k]:
+                xw = self.walls[2 * k]
+                near = (
+                    np.nonzero(xs - xw < self._rlist)[0]
+                    if k == 0
+                    else np.nonzero(xw - xs < self._rlist)[0]
+                )
+                src.append(near)
+                side.append(np.full(near.size, k))
+        self._src = np.concatenate(src).astype(np.int64) if src else np.zeros(0, np.int64)
+        self._side = np.concatenate(side).astype(np.int64) if side else np.zeros(0, np.int64)
+        ntot = n + self._src.size
+        if self._pk.shape[0] != ntot:
+            self._pk = np.zeros((ntot, csph.NPACK))
+        self._pack()
+        pos = np.ascontiguousarray(self._pk[:, :2])
+        origin, sides, nc = cell_grid(pos, self._rlist, self.periodic, self.lo, self.length)
+        cell, order, start = sort_by_cell(pos, origin, sides, nc)
+        while True:
+            need = build_list(
+                pos, n, self.periodic, self.length, nc, cell, order, start,
+                self._rlist**2, self._nbr, self._nnb,
+            )  # fmt: skip
+            if need <= self._nbr.shape[1]:
+                break
+            self._nbr = np.zeros((n, need + 8), dtype=np.int32)
+        self._x_ref = st.x.copy()
+        self._walls_ref = self.walls.copy()
+        self.n_builds += 1
+
+    def _pack(self) -> None:
+        st = self.state
+        csph.pack(
+            st.x, st.v, st.m, st.rho, st.e, st.S, st.l, self.eos.kind, self.eos.params,
+            self.strength.params, self._pk, self.pressure,
+        )  # fmt: skip
+        if self._src.size:
+            csph.fill_ghosts(self._pk, st.n, self._src, self._side, self.walls)
+
+    def _list_valid(self) -> bool:
+        d = csph.max_displacement(self.state.x, self._x_ref, self.periodic, self.length)
+        dw = float(np.max(np.abs(self.walls[[0, 2]] - self._walls_ref[[0, 2]])))
+        # a ghost moves by at most d + 2 dw; two particles approach by at most twice that
+        return self._cut() + 2.0 * (d + 2.0 * dw) < self._rlist
+
+    # -- the time loop -----------------------------------------------------------------------
+    def compute_rates(self) -> np.ndarray:
+        """Pack the state, rebuild the list if needed, and return the pair rates (n, NRATE):
+        dv_x/dt, dv_y/dt [m/s²], dE/dt [W/kg], L_xx, L_xy, L_yx, L_yy [1/s] (``csph``)."""
+        if not self._list_valid():
+            self._build()
+        else:
+            self._pack()
+        st = self.state
+        csph.correction(
+            self._pk, st.n, st.dim, self._nbr, self._nnb, self.theta, self.periodic,
+            self.length, self.grad_correction,
+        )  # fmt: skip
+        if self._src.size:
+            csph.fill_ghosts(self._pk, st.n, self._src, self._side, self.walls)
+        csph.pair_rates(
+            self._pk, st.n, st.dim, self._nbr, self._nnb, self.theta, self.periodic,
+            self.length, self.dev_mean, self.rates,
+        )  # fmt: skip
+        return self.rates
+
+    def step(self, dt: float | None = None) -> float:
+        """One time step (Δt from the seed's formula unless given); returns Δt [s]."""
+        st = self.state
+        self.compute_rates()
+        if dt is None:
+            dt = csph.time_step(self._pk, self.rates, st.n, self.cfl, self.k_comp)
+        if self.steps == 0:
+            self.dt0 = dt
+        self.dt = dt
+        if self.frozen is not None and self.frozen.any():
+            x_frozen = st.x[self.frozen, 0].copy()
+        bad = csph.update(
+            st.x, st.v, st.m, st.rho, st.e, st.S, st.eps_p, st.l, self.rates, dt,
+            self.strength.kind, self.strength.params, self.periodic, self.lo, self.length,
+            self.rho_max,
+        )  # fmt: skip
+        if self.frozen is not None and self.frozen.any():
+            f = self.frozen
+            st.x[f, 0] = x_frozen + self.frozen_velocity * dt
+            st.v[f] = 0.0
+            st.v[f, 0] = self.frozen_velocity
+            st.rho[f], st.e[f], st.l[f] = self.frozen_state
+            st.S[f] = 0.0
+            st.eps_p[f] = 0.0
+        self.walls[0] += self.walls[1] * dt
+        self.walls[2] += self.walls[3] * dt
+        st.time += dt
+        self.steps += 1
+        self._check(bad)
+        return dt
+
+    def advance(self, n_steps: int) -> None:
+        """Run ``n_steps`` steps (raises SPHUnstable)."""
+        with _threads_for(self.state.n):
+            for _ in range(int(n_steps)):
+                self.step()
+
+    def run_until(self, t_end: float, max_steps: int = 10_000_000) -> int:
+        """Step until time ≥ t_end [s]; returns the number of steps taken."""
+        k = 0
+        with _threads_for(self.state.n):
+            while self.state.time < t_end:
+                if k >= max_steps:
+                    raise SPHUnstable(
+                        "dt_collapse", f"{max_steps} steps did not reach t={t_end:g} s"
+                    )
+                self.step()
+                k += 1
+        return k
+
+    def _check(self, bad: int) -> None:
+        st = self.state
+        if bad:
+            fin = np.isfinite(st.rho) & np.isfinite(st.e) & np.isfinite(st.x[:, 0])
+            if not fin.all():
+                i = int(np.nonzero(~fin)[0][0])
+                raise SPHUnstable(
+                    "nan", f"{bad} particle(s) non-finite at step {self.steps}, "
+                    f"t={st.time:.6g} s; first i={i} at x={self._x_ref[i, 0]:.6g} m"
+                )  # fmt: skip
+            i = int(np.argmax(st.rho))
+            raise SPHUnstable(
+                "eos_range", f"density {st.rho[i]:.6g} kg/m³ of particle {i} beyond the EOS "
+                f"cap {self.rho_max:.6g} at step {self.steps}, t={st.time:.6g} s"
+            )  # fmt: skip
+        if self.dt < self.dt_floor * self.dt0:
+            raise SPHUnstable(
+                "dt_collapse", f"dt={self.dt:.3g} s fell below {self.dt_floor:g} of the first "
+                f"step's {self.dt0:.3g} s at step {self.steps}"
+            )  # fmt: skip
+        xs = st.x[:, 0]
+        tol = 0.5 * float(st.l.max())
+        if self.has_wall[0] and xs.min() < self.walls[0] - tol:
+            i = int(np.argmin(xs))
+            raise SPHUnstable(
+                "particle_lost", f"particle {i} at x={xs[i]:.6g} m went through the left wall "
+                f"at {self.walls[0]:.6g} m (step {self.steps})"
+            )  # fmt: skip
+        if self.has_wall[1] and xs.max() > self.walls[2] + tol:
+            i = int(np.argmax(xs))
+            raise SPHUnstable(
+                "particle_lost", f"particle {i} at x={xs[i]:.6g} m went through the right wall "
+                f"at {self.walls[2]:.6g} m (step {self.steps})"
+            )  # fmt: skip
+        if not self.periodic[0] and (
+            xs.min() < self.extent[0] - self.escape - abs(self.walls[1]) * st.time
+            or xs.max() > self.extent[1] + self.escape + abs(self.walls[3]) * st.time
+        ):
+            i = int(np.argmax(np.maximum(self.extent[0] - xs, xs - self.extent[1])))
+            raise SPHUnstable(
+                "particle_lost", f"particle {i} escaped to x={xs[i]:.6g} m (extent "
+                f"{self.extent[0]:.6g}..{self.extent[1]:.6g} m) at step {self.steps}"
+            )  # fmt: skip
+
+    def replace_particles(self, state: SPHState, frozen: np.ndarray | None = None) -> None:
+        """Swap in a new particle set (same dimension; the window adds and removes particles)
+        and rebuild the neighbour list; the clock, walls and Δt history are kept."""
+        if state.dim != self.state.dim:
+            raise ValueError("replace_particles: dimension changed")
+        n = state.n
+        self.state = state
+        self.frozen = None if frozen is None else np.asarray(frozen, dtype=bool).copy()
+        self.pressure = np.zeros(n)
+        self.rates = np.zeros((n, csph.NRATE))
+        self._nbr = np.zeros((n, self._nbr.shape[1]), dtype=np.int32)
+        self._nnb = np.zeros(n, dtype=np.int32)
+        self._pk = np.zeros((n, csph.NPACK))
+        self._build()
+
+    #: Names of the solver's private arrays a bit-exact checkpoint must carry.
+    LIST_ARRAYS = ("_nbr", "_nnb", "_x_ref", "_walls_ref", "_src", "_side")
+
+    def checkpoint_arrays(self) -> dict[str, np.ndarray]:
+        """Every array that defines the continuation (state, walls, list), by name."""
+        st = self.state
+        out = {"x": st.x, "v": st.v, "m": st.m, "rho": st.rho, "e": st.e, "S": st.S,
+               "eps_p": st.eps_p, "l": st.l, "walls": self.walls}  # fmt: skip
+        for k in self.LIST_ARRAYS:
+            out[k] = getattr(self, k)
+        if self.frozen is not None:
+            out["frozen"] = self.frozen
+        return {k: np.array(v, copy=True) for k, v in out.items()}
+
+    def checkpoint_scalars(self) -> dict[str, float | int]:
+        return {"time": self.state.time, "dt": self.dt, "dt0": self.dt0, "steps": self.steps,
+                "n_builds": self.n_builds, "rlist": self._rlist,
+                "frozen_velocity": self.frozen_velocity,
+                "frozen_rho": self.frozen_state[0], "frozen_e": self.frozen_state[1],
+                "frozen_l": self.frozen_state[2]}  # fmt: skip
+
+    def restore(self, arrays: dict[str, np.ndarray], scalars: dict) -> None:
+        """Put back what ``checkpoint_arrays``/``checkpoint_scalars`` returned (bit-exact)."""
+        st = SPHState(
+            x=arrays["x"], v=arrays["v"], m=arrays["m"], rho=arrays["rho"], e=arrays["e"],
+            S=arrays["S"], eps_p=arrays["eps_p"], l=arrays["l"], time=float(scalars["time"]),
+        )  # fmt: skip
+        n = st.n
+        self.state = st
+        self.walls = np.array(arrays["walls"], dtype=np.float64)
+        self.frozen = np.asarray(arrays["frozen"], bool).copy() if "frozen" in arrays else None
+        self._nbr = np.ascontiguousarray(arrays["_nbr"], dtype=np.int32)
+        self._nnb = np.ascontiguousarray(arrays["_nnb"], dtype=np.int32)
+        self._x_ref = np.array(arrays["_x_ref"], dtype=np.float64)
+        self._walls_ref = np.array(arrays["_walls_ref"], dtype=np.float64)
+        self._src = np.asarray(arrays["_src"], dtype=np.int64).copy()
+        self._side = np.asarray(arrays["_side"], dtype=np.int64).copy()
+        self.pressure = np.zeros(n)
+        self.rates = np.zeros((n, csph.NRATE))
+        self._pk = np.zeros((n + self._src.size, csph.NPACK))
+        self.dt = float(scalars["dt"])
+        self.dt0 = float(scalars["dt0"])
+        self.steps = int(scalars["steps"])
+        self.n_builds = int(scalars["n_builds"])
+        self._rlist = float(scalars["rlist"])
+        self.frozen_velocity = float(scalars["frozen_velocity"])
+        self.frozen_state = tuple(float(scalars[k]) for k in ("frozen_rho", "frozen_e", "frozen_l"))
+
+    # -- observables -------------------------------------------------------------------------
+    def profile_sums(self, width: float, x0: float | None = None, nbins: int | None = None):
+        """Per-bin sums along x of ``csph.PROFILE_FIELDS`` in slabs of ``width`` [m] from x0
+        (default: the left wall, or the leftmost particle), shape (nbins, 10)."""
+        st = self.state
+        self._pack()
+        if x0 is None:
+            x0 = float(self.walls[0]) if self.has_wall[0] else float(st.x[:, 0].min())
+        if nbins is None:
+            nbins = int(np.ceil((float(st.x[:, 0].max()) - x0) / width)) + 1
+        out = np.zeros((nbins, len(csph.PROFILE_FIELDS)))
+        csph.profile_sums(
+            st.x, st.v, st.m, st.rho, st.e, st.S, self.pressure, st.eps_p, float(x0),
+            float(width), out,
+        )  # fmt: skip
+        return out
+
+    def stress_xx(self) -> np.ndarray:
+        """σ_xx = −P + S_xx per particle [Pa] (tension positive)."""
+        self._pack()
+        return self.state.S[:, 0] - self.pressure
+
+
+# == the moving window (1D) ================================================================
+
+WINDOW_FORMAT = "hugomap-sph-window/1"
+
+
+@dataclass
+class SPHWindowGeometry:
+    """x_lo, x_hi [m]: window edges; cut_every [m]: how far the outflow face (the wall) may
+    recede behind x_lo before the particles behind x_lo are removed; sync_steps: steps between
+    boundary updates; dx0 [m]: spacing of the fresh inflow material; n_inflow: frozen inflow
+    particles kept beyond x_hi (≥ the kernel support in particles)."""
+
+    x_lo: float
+    x_hi: float
+    cut_every: float
+    sync_steps: int
+    dx0: float
+    n_inflow: int
+
+    @property
+    def length(self) -> float:
+        return self.x_hi - self.x_lo
+
+
+class SPHWindow:
+    """A moving observation window around a 1D ``CSPHSimulation`` (the protocol of
+    ``md.window.MDWindow``, SI units, per unit cross-section: ``area`` = 1 m²).
+
+    Frame: the window's. Inflow: beyond x_hi, ``n_inflow`` frozen particles of fresh material
+    at the initial state (ρ0, e0, S = 0, spacing dx0) move rigidly at u_in < 0; one that
+    crosses x_hi is released (integrated from then on) and new ones are laid behind the last.
+    Outflow: the left wall of the simulation is a rigid piston moving at u_out (its mirror
+    ghosts hold the shocked state: it is the piston of the piston method, in the window
+    frame); when it has receded ``cut_every`` behind x_lo, the particles behind x_lo are
+    removed and the wall is put back halfway between the last removed and the first kept
+    particle (as far from it as the piston face from the first particle at the start).
+    With the lab frame's upstream at rest: u_in = −W, u_out = u_p − W, u_p = u_out − u_in.
+    """
+
+    def __init__(
+        self,
+        sim: CSPHSimulation,
+        geom: SPHWindowGeometry,
+        u_in: float,
+        u_out: float,
+        rho0: float,
+        e0: float,
+        m0: float,
+    ):
+        if sim.state.dim != 1:
+            raise ValueError("SPHWindow runs 1D simulations only")
+        self.sim = sim
+        self.geom = geom
+        self.u_in = float(u_in)
+        self.u_out = float(u_out)
+        self.rho0 = float(rho0)
+        self.e0 = float(e0)
+        self.m0 = float(m0)
+        self.area = 1.0
+        self.n_updates = 0  # boundary updates that added or removed particles (this process)
+
+    @classmethod
+    def from_piston(
+        cls,
+        sim: CSPHSimulation,
+        x_front: float,
+        u_p: float,
+        D_guess: float,
+        length: float,
+        front_fraction: float = 0.5,
+        cut_every: float | None = None,
+        sync_steps: int = 10,
+        n_inflow: int = 8,
+        rho0: float | None = None,
+        e0: float = 0.0,
+    ) -> SPHWindow:
+        """Cut a window out of a 1D piston run (lab frame: piston at the left wall moving at
+        u_p, upstream at rest, initial density ``rho0``, default the EOS's ρ0) with the front
+        at ``front_fraction`` of ``length`` from x_lo, in the frame moving at ``D_guess``."""
+        st = sim.state
+        if st.dim != 1:
+            raise ValueError("SPHWindow.from_piston needs a 1D piston run")
+        if rho0 is None:
+            rho0 = float(sim.eos.params[0]) if sim.eos.name == "mie_gruneisen" else None
+            if rho0 is None:
+                raise ValueError("give rho0 for this EOS")
+        order = np.argsort(st.x[:, 0], kind="stable")
+        xs = st.x[order, 0]
+        lo = x_front - front_fraction * length
+        hi = x_front + (1.0 - front_fraction) * length
+        k0 = int(np.searchsorted(xs, lo))
+        m0 = float(np.median(st.m))
+        dx0 = m0 / rho0
+        if k0 < 2 or int(np.searchsorted(xs, hi)) + n_inflow > xs.size:
+            raise ValueError(
+                f"a window [{lo:.4g}, {hi:.4g}] m with {n_inflow} inflow particles does not fit "
+                f"in the sample [{xs[0]:.4g}, {xs[-1]:.4g}] m: shorten it or lengthen the sample"
+            )
+        wall = 0.5 * (xs[k0 - 1] + xs[k0])
+        keep = order[k0:]
+        kx = st.x[keep, 0]
+        inflow = kx >= hi
+        n_keep = int(np.count_nonzero(~inflow)) + n_inflow
+        keep = keep[:n_keep]
+        frozen = np.zeros(n_keep, dtype=bool)
+        frozen[n_keep - n_inflow :] = True
+        du = -D_guess
+        new = SPHState(
+            x=st.x[keep] - lo, v=st.v[keep] + du, m=st.m[keep], rho=st.rho[keep],
+            e=st.e[keep], S=st.S[keep], eps_p=st.eps_p[keep], l=st.l[keep], time=st.time,
+        )  # fmt: skip
+        u_in, u_out = du, u_p + du
+        new.v[frozen, 0] = u_in
+        w = CSPHSimulation(
+            new, sim.eos, sim.strength, theta=sim.theta, cfl=sim.cfl, k_comp=sim.k_comp,
+            walls=(wall - lo, u_out, None, 0.0), grad_correction=sim.grad_correction,
+            skin=sim.skin, dt_floor=sim.dt_floor, escape_distance=sim.escape,
+        )  # fmt: skip
+        w.dt = sim.dt  # the last step's Δt until the window takes its own (methods read it)
+        w.frozen = frozen
+        w.frozen_velocity = u_in
+        w.frozen_state = (float(rho0), float(e0), float(dx0))
+        cut = float(cut_every) if cut_every is not None else 10.0 * dx0
+        geom = SPHWindowGeometry(0.0, hi - lo, cut, int(sync_steps), float(dx0), int(n_inflow))
+        return cls(w, geom, u_in, u_out, rho0, e0, m0)
+
+    # -- protocol ----------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        return self.sim.time
+
+    @property
+    def dt(self) -> float:
+        return self.sim.dt
+
+    @property
+    def n_particles(self) -> int:
+        f = self.sim.frozen
+        return int(self.sim.state.n - (0 if f is None else np.count_nonzero(f)))
+
+    def advance(self, n_steps: int) -> None:
+        """Advance ``n_steps`` (rounded up to whole boundary updates of ``sync_steps``)."""
+        k = self.geom.sync_steps
+        for _ in range(max(1, math.ceil(n_steps / k))):
+            self.sim.advance(k)
+            self._update_boundaries()
+
+    def _update_boundaries(self) -> None:
+        g = self.geom
+        sim = self.sim
+        st = sim.state
+        if not self.u_in < 0:
+            raise SPHUnstable("no_inflow", f"u_in = {self.u_in:.4g} m/s must be < 0")
+        if sim.walls[0] > g.x_lo + g.cut_every:
+            raise SPHUnstable(
+                "outflow_reversed",
+                f"the outflow face moved {sim.walls[0] - g.x_lo:.3g} m into the window "
+                f"(u_out = {self.u_out:.4g} m/s > 0 for too long)",
+            )
+        frozen = sim.frozen.copy()
+        xs = st.x[:, 0]
+        frozen &= xs >= g.x_hi  # release what crossed x_hi
+        n_frozen = int(np.count_nonzero(frozen))
+        add = g.n_inflow - n_frozen if n_frozen < g.n_inflow // 2 + 1 else 0
+        cut = sim.walls[0] < g.x_lo - g.cut_every
+        if not (add or cut):
+            sim.frozen = frozen
+            return
+        keep = np.ones(st.n, dtype=bool)
+        wall = float(sim.walls[0])
+        if cut:
+            behind = (xs < g.x_lo) & ~frozen
+            keep = ~behind
+            if behind.any() and keep.any():
+                wall = 0.5 * (float(xs[behind].max()) + float(xs[keep].min()))
+        arrays = {k: getattr(st, k)[keep] for k in ("x", "v", "m", "rho", "e", "S", "eps_p", "l")}
+        frozen = frozen[keep]
+        if add:
+            last = float(xs[sim.frozen].max()) if sim.frozen.any() else float(xs.max())
+            xn = last + g.dx0 * np.arange(1, add + 1)
+            arrays["x"] = np.concatenate([arrays["x"], xn[:, None]])
+            arrays["v"] = np.concatenate([arrays["v"], np.full((add, 1), self.u_in)])
+            arrays["m"] = np.concatenate([arrays["m"], np.full(add, self.m0)])
+            arrays["rho"] = np.concatenate([arrays["rho"], np.full(add, self.rho0)])
+            arrays["e"] = np.concatenate([arrays["e"], np.full(add, self.e0)])
+            arrays["S"] = np.concatenate([arrays["S"], np.zeros((add, 4))])
+            arrays["eps_p"] = np.concatenate([arrays["eps_p"], np.zeros(add)])
+            arrays["l"] = np.concatenate([arrays["l"], np.full(add, g.dx0)])
+            frozen = np.concatenate([frozen, np.ones(add, dtype=bool)])
+        sim.walls[0] = wall
+        sim.replace_particles(SPHState(**arrays, time=st.time), frozen)
+        self.n_updates += 1
+
+    def galilean_shift(self, du: float) -> None:
+        """Add ``du`` [m/s] to every velocity (mobile and frozen), u_in, u_out and the wall."""
+        self.sim.state.v[:, 0] += du
+        self.sim.walls[1] += du
+        self.sim.frozen_velocity += du
+        self.u_in += du
+        self.u_out += du
+
+    def set_outflow(self, u_out: float) -> None:
+        """Set the outflow velocity [m/s]: the wall (piston) behind x_lo."""
+        self.sim.walls[1] = u_out
+        self.u_out = float(u_out)
+
+    def wall_positions(self) -> tuple[float, float]:
+        return self.geom.x_lo, self.geom.x_hi
+
+    def count_in_window(self) -> int:
+        """Mobile particles with x_lo ≤ x < x_hi."""
+        xs = self.sim.state.x[:, 0]
+        inside = (xs >= self.geom.x_lo) & (xs < self.geom.x_hi) & ~self.sim.frozen
+        return int(np.count_nonzero(inside))
+
+    def mean_velocity(self) -> float:
+        st = self.sim.state
+        mob = ~self.sim.frozen
+        return float(np.sum(st.m[mob] * st.v[mob, 0]) / np.sum(st.m[mob]))
+
+    def profile_sums(self, width: float) -> np.ndarray:
+        """``csph.PROFILE_FIELDS`` sums in bins of ``width`` [m] from x_lo across the window."""
+        nb = int(math.ceil(self.geom.length / width - 1e-9))
+        return self.sim.profile_sums(width, x0=self.geom.x_lo, nbins=nb)
+
+    # -- checkpoints -------------------------------------------------------------------------
+    def to_dataset(self, attrs: dict | None = None) -> xr.Dataset:
+        """Everything the continuation needs (state, frozen mask, walls, neighbour list and
+        its reference positions, clock, window), with a SHA-256 checksum."""
+        sim = self.sim
+        data = {}
+        for k, a in sim.checkpoint_arrays().items():
+            a = a.astype(np.int8) if a.dtype == np.bool_ else a
+            data[k] = (tuple(f"{k}_{d}" for d in range(a.ndim)), a)
+        ds = xr.Dataset(data)
+        ds.attrs.update(attrs or {})
+        ds.attrs.update(
+            window_format=WINDOW_FORMAT,
+            scalars=json.dumps(sim.checkpoint_scalars()),
+            geometry=json.dumps(asdict(self.geom)),
+            window=json.dumps(
+                {
+                    "u_in": self.u_in,
+                    "u_out": self.u_out,
+                    "rho0": self.rho0,
+                    "e0": self.e0,
+                    "m0": self.m0,
+                }
+            ),  # fmt: skip
+            solver=json.dumps(
+                {
+                    "eos": sim.eos.name,
+                    "eos_params": sim.eos.params.tolist(),
+                    "eos_source": sim.eos.source,
+                    "strength": sim.strength.name,
+                    "strength_params": sim.strength.params.tolist(),
+                    "strength_source": sim.strength.source,
+                    "theta": sim.theta,
+                    "cfl": sim.cfl,
+                    "k_comp": sim.k_comp,
+                    "grad_correction": sim.grad_correction,
+                    "skin": sim.skin,
+                    "dt_floor": sim.dt_floor,
+                    "escape": sim.escape,
+                    "extent": list(sim.extent),
+                }
+            ),  # fmt: skip
+        )
+        ds.attrs["checksum"] = "sha256:" + checkpoint_checksum(ds)
+        return ds
+
+    def save(self, path: str | os.PathLike, attrs: dict | None = None) -> Path:
+        """Save atomically; ``load`` continues bit for bit (same thread count)."""
+        return write_netcdf(self.to_dataset(attrs), path)
+
+    @classmethod
+    def from_dataset(cls, ds: xr.Dataset, source: str | os.PathLike | None = None) -> SPHWindow:
+        """Rebuild a window saved by ``save``; a foreign or altered file raises
+        ``CheckpointError`` naming ``source``."""
+        where = str(source if source is not None else ds.encoding.get("source", "(in memory)"))
+        if ds.attrs.get("window_format") != WINDOW_FORMAT:
+            raise CheckpointError(
+                where, f"not an SPH window (format {ds.attrs.get('window_format')!r})"
+            )
+        if ds.attrs.get("checksum") != "sha256:" + checkpoint_checksum(ds):
+            raise CheckpointError(where, "checksum mismatch: the file was altered or truncated")
+        sol = json.loads(ds.attrs["solver"])
+        eos = EOS(sol["eos"], np.array(sol["eos_params"]), sol["eos_source"])
+        strength = Strength(sol["strength"], np.array(sol["strength_params"]),
+                            sol["strength_source"])  # fmt: skip
+        arrays = {k: ds[k].values for k in ds.data_vars}
+        arrays["frozen"] = arrays["frozen"].astype(bool)
+        sc = json.loads(ds.attrs["scalars"])
+        st = SPHState(x=arrays["x"], v=arrays["v"], m=arrays["m"], rho=arrays["rho"],
+                      e=arrays["e"], S=arrays["S"], eps_p=arrays["eps_p"], l=arrays["l"],
+                      time=float(sc["time"]))  # fmt: skip
+        walls = arrays["walls"]
+        sim = CSPHSimulation(
+            st, eos, strength, theta=sol["theta"], cfl=sol["cfl"], k_comp=sol["k_comp"],
+            walls=(float(walls[0]), float(walls[1]), None, 0.0),
+            grad_correction=sol["grad_correction"], skin=sol["skin"],
+            dt_floor=sol["dt_floor"], escape_distance=sol["escape"],
+        )  # fmt: skip
+        sim.extent = tuple(sol["extent"])
+        sim.restore(arrays, sc)
+        geom = SPHWindowGeometry(**json.loads(ds.attrs["geometry"]))
+        w = json.loads(ds.attrs["window"])
+        return cls(sim, geom, w["u_in"], w["u_out"], w["rho0"], w["e0"], w["m0"])
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> SPHWindow:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            ds.load()
+        return cls.from_dataset(ds, path)

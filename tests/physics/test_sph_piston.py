@@ -1,0 +1,160 @@
+"""1D copper driven by a piston: shock speed against the linear Hugoniot, and the elastic
+precursor at the Hugoniot elastic limit.
+
+Set-up: uniaxial strain (1D), copper on a lattice of spacing 10 µm at rest, Mie–Grüneisen EOS
+(ρ0 = 8930 kg/m³, c0 = 3940 m/s, s = 1.49, Γ0 = 2, LASL), a rigid piston (the left wall)
+moving at u_p from t = 0, free far end.
+
+Shock speed (no strength). Reference: Us = c0 + s u_p, exact for this EOS (it is referenced to
+that Hugoniot). Measurement: front tracking — every 20 steps the Eulerian position where the
+particle velocity crosses u_p/2 (linear interpolation between the two particles that bracket
+it); Us is the least-squares slope of that position against time over the last 70 % of the
+run (the first 30 % holds the start-up transient). Tolerance 1 % (the issue's). Measured
+errors (θ = 0.6, C = 0.3, gradient correction on): u_p = 100: +0.03 %, 500: −0.12 %, 1000:
+−0.39 %, 2000: −0.89 %; the error grows with u_p because the continuity density lags the real
+compression through a front a few particles wide (by 0.9 % of ρ at 2000 m/s). Without the
+gradient correction (the seed's sums as printed): −1.9 % at every u_p from 100 to 2000.
+
+HEL (von Mises, Steinberg–Guinan G = 47.7 GPa, Y = 0.12 GPa). Reference: the elastic
+precursor of uniaxial strain carries σ_HEL = Y (1 − ν)/(1 − 2ν) = Y (K + 4G/3)/(2G), with
+K = ρ0 c0² and ν = (3K − 2G)/(2(3K + G)) = 0.346: σ_HEL = 0.2544 GPa. (The EOS is nonlinear:
+at the HEL η ≈ 1.2e-3 and s η changes K by 0.4 %, inside the tolerance.) Measurement: when
+the elastic front has run 80 % of the sample, the plastic front is the last particle with
+−σ_xx above half its maximum, the elastic front the last above 1 % of it; the precursor is
+the median of −σ_xx over the middle third between them. Tolerance 5 % (the issue's); measured
+with the seed's strain rate −0.8 % (n = 2000; −0.4 % with n = 3000), with ``dev_mean``
+(mean-velocity strain rate for dS/dt) −0.2 % (n = 2000; −0.004 % with n = 3000).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hugomap.eos import copper
+from hugomap.sph.simulation import CSPHSimulation
+from hugomap.sph.state import SPHState
+from hugomap.strength import copper as copper_strength
+from hugomap.strength.von_mises import hel
+
+DX = 1e-5
+
+
+def _bar(n: int) -> SPHState:
+    rho0 = copper().params[0]
+    x = (np.arange(n) + 0.5) * DX
+    return SPHState(x=x, v=np.zeros(n), m=rho0 * DX, rho=rho0, e=0.0)
+
+
+def _strip(n: int, rows: int) -> SPHState:
+    """A 2D square-lattice strip n × rows (index i·rows + j: row j is x[j::rows])."""
+    rho0 = copper().params[0]
+    i, j = np.meshgrid(np.arange(n), np.arange(rows), indexing="ij")
+    x = np.column_stack([(i.ravel() + 0.5) * DX, (j.ravel() + 0.5) * DX])
+    return SPHState(x=x, v=np.zeros_like(x), m=rho0 * DX * DX, rho=rho0, e=0.0)
+
+
+def shock_speed(up: float, n: int = 400, grad_correction: bool = True, rows: int = 0) -> float:
+    """Front-tracked Us [m/s] of a piston at u_p [m/s] into n particles (module docstring);
+    ``rows`` > 0: a 2D plane-strain strip of that many rows, periodic in y (front tracked in
+    every row, positions averaged)."""
+    eos = copper()
+    c0, s = eos.params[1], eos.params[2]
+    if rows:
+        st = _strip(n, rows)
+        extra = {"periodic": (False, True), "length": (1.0, rows * DX)}
+    else:
+        st, extra, rows = _bar(n), {}, 1
+    sim = CSPHSimulation(
+        st, eos, walls=(0.0, up, None, 0.0), grad_correction=grad_correction, **extra
+    )
+    t_end = 0.8 * n * DX / (c0 + s * up)
+    ts, xf = [], []
+    while sim.time < t_end:
+        sim.advance(20)
+        pos = []
+        for j in range(rows):
+            v = st.v[j::rows, 0]
+            xr = st.x[j::rows, 0]
+            k = int(np.nonzero(v > 0.5 * up)[0].max())
+            pos.append(xr[k] + (0.5 * up - v[k]) / (v[k + 1] - v[k]) * (xr[k + 1] - xr[k]))
+        xf.append(np.mean(pos))
+        ts.append(sim.time)
+    ts, xf = np.array(ts), np.array(xf)
+    late = ts > 0.3 * t_end
+    return float(np.polyfit(ts[late], xf[late], 1)[0])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("up", [100.0, 500.0, 1000.0, 2000.0])
+def test_shock_speed_on_linear_hugoniot(up):
+    eos = copper()
+    ref = eos.params[1] + eos.params[2] * up
+    us = shock_speed(up)
+    assert abs(us / ref - 1.0) < 0.01, f"Us={us:.1f} m/s, c0+s*up={ref:.1f} m/s"
+
+
+@pytest.mark.slow
+def test_same_shock_in_1d_and_2d():
+    """The issue's "model no more than the scene needs": a plane-strain strip (8 rows,
+    periodic in y: the period must be at least twice the neighbour-list radius) gives the 1D
+    shock speed within 1 % (measured: 0.014 %)."""
+    us1 = shock_speed(1000.0, n=300)
+    us2 = shock_speed(1000.0, n=300, rows=8)
+    assert abs(us2 / us1 - 1.0) < 0.01, (us1, us2)
+
+
+@pytest.mark.slow
+def test_plane_strain_with_strength_matches_uniaxial():
+    """With strength, the 2D strip behind the plastic wave matches the 1D run: σ_xx within
+    1 % (measured 0.003 %), and with ``dev_mean`` the deviator keeps the uniaxial-strain form
+    S_yy = S_zz = −S_xx/2 to round-off. (With the seed's contact-velocity strain rate the
+    angled pairs' U* carries the longitudinal stress jump into L_yy inside the front, and
+    the plastic flow there leaves S_yy ≠ S_zz by ~6 % of Y: measured 42.3 vs 37.4 MPa.)"""
+    eos, strength, up, n, rows = copper(), copper_strength(), 300.0, 300, 8
+    t_end = 0.7 * n * DX / 4759.0
+    one = CSPHSimulation(_bar(n), eos, strength, walls=(0.0, up, None, 0.0), dev_mean=True)
+    one.run_until(t_end)
+    two = CSPHSimulation(
+        _strip(n, rows), eos, strength, walls=(0.0, up, None, 0.0), dev_mean=True,
+        periodic=(False, True), length=(1.0, rows * DX),
+    )  # fmt: skip
+    two.run_until(t_end)
+    s1 = one.stress_xx()
+    s2 = two.stress_xx().reshape(n, rows)
+    mid = slice(n // 8, n // 3)  # behind the plastic wave, clear of the piston's start-up
+    assert np.allclose(s2[mid].mean(axis=1), s1[mid], rtol=0.01)
+    S = two.state.S.reshape(n, rows, 4)[mid]
+    Y = strength.Y
+    assert np.max(np.abs(S[..., 1] - S[..., 2])) < 1e-6 * Y
+    assert np.max(np.abs(S[..., 1] + 0.5 * S[..., 0])) < 1e-6 * Y
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("dev_mean", [False, True])
+def test_elastic_precursor_at_hel(dev_mean):
+    eos = copper()
+    strength = copper_strength()
+    rho0, c0 = eos.params[0], eos.params[1]
+    K = rho0 * c0**2
+    G, Y = strength.G, strength.Y
+    ref = hel(G, Y, K)
+    n = 2000
+    st = _bar(n)
+    sim = CSPHSimulation(st, eos, strength, walls=(0.0, 300.0, None, 0.0), dev_mean=dev_mean)
+    cl = np.sqrt((K + 4.0 * G / 3.0) / rho0)
+    sim.run_until(0.8 * n * DX / cl)
+    sx = -sim.stress_xx()
+    smax = sx.max()
+    i_e = int(np.nonzero(sx > 0.01 * smax)[0].max())
+    i_p = int(np.nonzero(sx > 0.5 * smax)[0].max())
+    a, b = i_p + (i_e - i_p) // 3, i_p + 2 * (i_e - i_p) // 3
+    assert b - a >= 20, "the precursor plateau is not resolved"
+    plateau = float(np.median(sx[a:b]))
+    assert abs(plateau / ref - 1.0) < 0.05, f"precursor {plateau:.4g} Pa, HEL {ref:.4g} Pa"
+    # nowhere outside the yield surface; behind the plastic wave every particle has yielded
+    # (reverberations later unload some slightly inside the surface: down to 0.92 Y here)
+    seq = np.sqrt(1.5 * np.sum(st.S[:, :3] ** 2, axis=1) + 3.0 * st.S[:, 3] ** 2)
+    assert np.all(seq <= Y * (1.0 + 1e-12))
+    behind = slice(5, i_p - 20)
+    assert np.all(st.eps_p[behind] > 0.0)
