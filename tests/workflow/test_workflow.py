@@ -36,7 +36,7 @@ def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
     agg = tmp_path / "results" / "hugoniot" / "tiny.nc"
     with xr.open_mfdataset([agg], engine="netcdf4", combine="by_coords") as ds:  # dask-backed
         assert ds["P"].dims == ("scheme", "u_p")
-        assert list(ds["scheme"].values) == ["piston", "amw", "dichotomy"]
+        assert list(ds["scheme"].values) == ["piston", "amw", "mw", "dichotomy"]
         assert list(ds["u_p"].values) == [1.5, 2.5]
         for name in ("D", "u_p_measured", "rho", "V", "P", "P_rh", "E_minus_E0", "T",
                      "residual_mass", "residual_momentum", "residual_energy", "wall_s",
@@ -51,7 +51,7 @@ def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
         assert (piston["P"] > ds["P0"]).all()  # a shock compresses
         # The window schemes on this tiny scene may fail, but only with a named reason.
         known = {"ok", "not_converged", *FAILURES}
-        for s in ("amw", "dichotomy"):
+        for s in ("amw", "mw", "dichotomy"):
             st = ds.sel({"scheme": s})
             for status, diag, P in zip(st["status"].values, st["diagnostic"].values,
                                        st["P"].values, strict=True):  # fmt: skip

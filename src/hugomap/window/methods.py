@@ -166,7 +166,8 @@ def _diverging(h: ControlHistory, z: float) -> tuple[str, str] | None:
     if len(lobes) >= 4 and lobes[-1] >= 0.7 * lobes[-3]:
         return "oscillating", (
             f"the front speed oscillates without decaying ({len(lobes) - 1} sign changes of "
-            f"a_k; peaks {', '.join(f'{v:.3g}' for v in lobes[-4:])}): gains too large"
+            f"a_k; peaks {', '.join(f'{v:.3g}' for v in lobes[-4:])}): the correction gain is "
+            "too large, or the front speed wanders on time scales longer than window_time"
         )
     return None
 
