@@ -410,7 +410,7 @@ def test_every_failure_status_the_code_emits_is_registered():
 
     src = Path(__file__).resolve().parents[2] / "src" / "hugomap"
     pattern = re.compile(
-        r"(?:WindowError|SolverUnstable|StageFailed|ControlResult\(\s*False,|_finish\(\s*s,)"
+        r"(?:WindowError|SolverUnstable|SPHUnstable|StageFailed|ControlResult\(\s*False,|_finish\(\s*s,)"
         r"\(?\s*\"([a-z_]+)\""
     )
     found = set()
