@@ -6,7 +6,7 @@ sample must grow with the run, so its cost grows with the square. This script me
 on the lj_liquid pole (ρ0* = 0.80, T0* = 2.0, rc = 2.5 σ shifted) at u_p = 2 σ/τ, with the
 library's own stages (the same code the workflow runs):
 
-- piston: samples of 40, 80, 160 (and with ``--long`` 320) fcc cells along x (4 × 4 across),
+- piston: samples of 40, 80, 160 (and with ``--long`` 320) fcc cells along x (6 × 6 across),
   each loaded and driven to the far end (``pipeline.load_to_target_stage`` +
   ``piston_point``): simulated time ∝ sample length;
 - windows: one 50-σ window cut from the 80-cell loading checkpoint (``window_start``), then
@@ -70,7 +70,7 @@ def _scene(nx: int, average_time: float = 10.0) -> dict:
                 "solver": "md",
                 "phase": "liquid",
                 "potential": {"rc": 2.5, "shift": True, "skin": 0.3},
-                "sample": {"rho0": 0.8, "T0": 2.0, "cells": [nx, 4, 4], "seed": 5},
+                "sample": {"rho0": 0.8, "T0": 2.0, "cells": [nx, 6, 6], "seed": 5},
                 "shock": {"u_p": [U_P], "dt": 0.002},
                 "window": {
                     "average_time": average_time,
