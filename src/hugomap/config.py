@@ -202,6 +202,9 @@ def _cross_checks(cfg: dict) -> list[str]:
     problems = []
     for name, sc in cfg.get("scenes", {}).items():
         base = f"scenes.{name}"
+        if sc.get("solver") == "csph":
+            problems += _csph_checks(base, sc, cfg.get("schemes", ["piston"]))
+            continue
         smp, pot, sh = sc["sample"], sc["potential"], sc["shock"]
         a = lattice_constant(smp["rho0"])
         L = [c * a for c in smp["cells"]]
@@ -254,14 +257,181 @@ def _cross_checks(cfg: dict) -> list[str]:
     return problems
 
 
+# -- CSPH scenes (SI units) ---------------------------------------------------------------
+
+#: Smallest pore radius in lattice spacings (``hugomap.sph.sample.K_RESOLUTION``).
+K_RESOLUTION = 3.0
+#: RSA jamming coverage of equal discs (Feder 1980; Hinrichsen, Feder & Jøssang 1986).
+RSA_JAMMING = 0.547
+#: Particles a CSPH sample must hold along x (front tracking, slabs, window).
+MIN_COLUMNS = 40
+#: Frozen inflow particles of the 1D window (``sph.simulation.SPHWindow.from_piston``).
+WINDOW_INFLOW = 8
+
+
+def fill_csph_defaults(sc: dict) -> None:
+    """Fill the CSPH defaults that scale with the lattice spacing dx [m] (idempotent):
+    shock.bin_width = 2 dx, shock.gap = 10 dx, shock.avg_length = 20 dx, window.length =
+    150 dx, window.cut_every = 10 dx. Time defaults that depend on u_p (window_time,
+    average_time) are resolved per point by the window stages."""
+    dx = sc["sample"]["dx"]
+    for key, k in (("bin_width", 2.0), ("gap", 10.0), ("avg_length", 20.0)):
+        sc["shock"].setdefault(key, k * dx)
+    sc["window"].setdefault("length", 150.0 * dx)
+    sc["window"].setdefault("cut_every", 10.0 * dx)
+
+
+def _csph_checks(base: str, sc: dict, top_schemes: list) -> list[str]:
+    """Cross-key checks of a CSPH scene (SI units); each message names the keys involved."""
+    out: list[str] = []
+    smp, sh, w = sc["sample"], sc["shock"], sc["window"]
+    eos, st = sc["material"]["eos"], sc["material"]["strength"]
+    num = sc["numerics"]
+    dx, length, dim = smp["dx"], smp["length"], sc["dim"]
+    fill_csph_defaults(sc)
+    schemes = sc.get("schemes", top_schemes)
+    other = [s for s in schemes if s not in ("piston", "amw")]
+    if other:
+        where = f"{base}.schemes" if "schemes" in sc else "schemes"
+        out.append(
+            f"{where} = {_show(schemes)}: a solver = csph scene ({base}) runs only "
+            "['piston', 'amw']; give the scene its own schemes"
+        )
+    if "amw" in schemes and dim != 1:
+        out.append(
+            f"{base}.schemes = {_show(schemes)}: amw needs dim = 1 (the CSPH window is 1D); "
+            f"allowed for dim = {dim}: ['piston']"
+        )
+    if st["model"] == "von_mises" and st["yield_stress"] >= st["shear_modulus"]:
+        out.append(
+            f"{base}.material.strength.yield_stress = {st['yield_stress']:.4g}: must be below "
+            f"material.strength.shear_modulus = {st['shear_modulus']:.4g} Pa; allowed range "
+            f"(0, {st['shear_modulus']:.4g}) Pa"
+        )
+    n_x = length / dx
+    if n_x < MIN_COLUMNS:
+        out.append(
+            f"{base}.sample.length = {length:.4g}: holds {n_x:.3g} particles of sample.dx = "
+            f"{dx:.4g} m; allowed range [{MIN_COLUMNS * dx:.4g}, 1.0] m ({MIN_COLUMNS} dx)"
+        )
+    if dim == 1 and ("width" in smp or "porous" in smp):
+        key = "width" if "width" in smp else "porous"
+        out.append(f"{base}.sample.{key}: only for dim = 2 (this scene has dim = 1)")
+    if dim == 2:
+        r_list = (4.0 * num["theta"] + 0.5) * dx  # neighbour-list radius, skin 0.5 l
+        if "width" not in smp:
+            out.append(f"{base}.sample: 'width' is a required property for dim = 2")
+        elif smp["width"] < 2.0 * r_list:
+            out.append(
+                f"{base}.sample.width = {smp['width']:.4g}: the periodic width must be at least "
+                f"twice the neighbour-list radius (4 numerics.theta + 0.5) sample.dx; allowed "
+                f"range [{2.0 * r_list:.4g}, 1.0] m"
+            )
+    por = smp.get("porous")
+    if dim == 2 and por is not None and "width" in smp:
+        alpha = por["distention"]
+        r = por.get("pore_radius")
+        if r is None:
+            out.append(f"{base}.sample.porous: 'pore_radius' is a required property")
+        else:
+            r_min, r_max = r
+            if r_min > r_max:
+                out.append(
+                    f"{base}.sample.porous.pore_radius = {_show(r)}: r_min must not exceed r_max"
+                )
+            if r_min < K_RESOLUTION * dx * (1 - 1e-12):
+                out.append(
+                    f"{base}.sample.porous.pore_radius = {_show(r)}: the smallest pore is "
+                    f"not resolved by sample.dx = {dx:.4g} m; allowed r_min >= "
+                    f"{K_RESOLUTION:g} dx = {K_RESOLUTION * dx:.4g} m (or a smaller dx)"
+                )
+            if 2.0 * r_max + dx > smp["width"]:
+                out.append(
+                    f"{base}.sample.porous.pore_radius = {_show(r)}: a pore of r_max must fit "
+                    f"across sample.width = {smp['width']:.4g} m; allowed r_max <= "
+                    f"{(smp['width'] - dx) / 2:.4g} m"
+                )
+            # RSA with a ligament g = dx jams at coverage 0.547 (r/(r + g/2))^2 (sample.py);
+            # the solid end layers (4 dx each) lower the reachable mean porosity further.
+            core = max(length - 8.0 * dx, 0.0) / length
+            phi_max = RSA_JAMMING * (r_max / (r_max + 0.5 * dx)) ** 2 * core
+            phi = 1.0 - 1.0 / alpha
+            if phi > phi_max:
+                out.append(
+                    f"{base}.sample.porous.distention = {alpha:g}: porosity {phi:.3f} cannot be "
+                    f"packed with pore_radius max {r_max:.4g} m at sample.dx = {dx:.4g} m "
+                    f"(random sequential addition jams near porosity {phi_max:.3f}); allowed "
+                    f"range [1, {1.0 / (1.0 - phi_max):.4g})"
+                )
+    if sh["end_fraction"] <= sh["load_fraction"]:
+        out.append(
+            f"{base}.shock.end_fraction = {sh['end_fraction']:g}: must exceed "
+            f"shock.load_fraction = {sh['load_fraction']:g}; allowed range "
+            f"({sh['load_fraction']:g}, 1)"
+        )
+    behind = sh["load_fraction"] * length
+    need = sh["avg_length"] + 2.0 * sh["gap"]
+    if need >= behind:
+        out.append(
+            f"{base}.shock.avg_length = {sh['avg_length']:.4g}: avg_length + 2 shock.gap "
+            f"(= {need:.4g} m) must be shorter than the length the front has crossed at the "
+            f"end of loading, shock.load_fraction x sample.length = {behind:.4g} m"
+        )
+    if sh["bin_width"] > 0.25 * sh["avg_length"]:
+        out.append(
+            f"{base}.shock.bin_width = {sh['bin_width']:.4g}: at most a quarter of "
+            f"shock.avg_length = {sh['avg_length']:.4g} m"
+        )
+    if "amw" in schemes and dim == 1:
+        Lw, ff = w["length"], w["front_fraction"]
+        u_max = max(sh["u_p"])
+        D = eos["c0"] + eos["s"] * u_max
+        room_behind = behind * (1.0 - u_max / D)
+        room_ahead = (1.0 - sh["load_fraction"]) * length - WINDOW_INFLOW * dx
+        if ff * Lw > room_behind or (1.0 - ff) * Lw > room_ahead:
+            out.append(
+                f"{base}.window.length = {Lw:.4g}: a window with window.front_fraction = {ff:g} "
+                f"does not fit around the front at the end of loading (room {room_behind:.4g} m "
+                f"behind it at u_p = {u_max:g} m/s, {room_ahead:.4g} m ahead); shorten it or "
+                "lengthen sample.length"
+            )
+    return out
+
+
+def _tree_copy(node: Any, ancestors: tuple[int, ...] = ()) -> Any:
+    """A copy of ``node`` in which no dict or list appears twice (YAML aliases become
+    separate copies); a value that contains itself keeps its cycle (refused later)."""
+    if not isinstance(node, dict | list) or id(node) in ancestors:
+        return node
+    inner = (*ancestors, id(node))
+    if isinstance(node, dict):
+        return {k: _tree_copy(v, inner) for k, v in node.items()}
+    return [_tree_copy(v, inner) for v in node]
+
+
+def _unshare(cfg: dict) -> None:
+    """Replace the values of ``cfg`` by unshared copies before defaults are filled in place:
+    a block shared through a YAML anchor (``shock: *common`` in two scenes) would otherwise
+    get the first scene's defaults (CSPH: bin_width = 2 dx of that scene) in the other too,
+    and the caller's own objects would be changed."""
+    try:
+        for k in list(cfg):
+            cfg[k] = _tree_copy(cfg[k], (id(cfg),))
+    except RecursionError:  # nesting too deep to copy: validated as it is
+        pass
+
+
 def validate_config(cfg: Any, schema: dict | None = None) -> dict:
-    """Validate ``cfg`` in place (filling defaults) and return it; raise ConfigError.
+    """Validate ``cfg`` in place (filling defaults) and return it; raise ConfigError. The
+    values of ``cfg`` are replaced by unshared copies first (``_unshare``).
 
     Anything that is not a valid config (wrong types, NaN, unknown keys, non-string keys,
     self-containing YAML anchors) is refused with a ConfigError naming the key path; no
     other exception escapes.
     """
     problems = _huge_integers(cfg)
+    if isinstance(cfg, dict):
+        _unshare(cfg)
     if not problems:
         schema = schema or load_schema()
         try:

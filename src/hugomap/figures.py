@@ -23,6 +23,29 @@ def _cutoff(ds: xr.Dataset, scene: str) -> str:
         return "?"
 
 
+def _solver(ds: xr.Dataset, scene: str) -> str:
+    """The scene's solver (``md`` or ``csph``) from the resolved config in the aggregate."""
+    import json
+
+    try:
+        return str(json.loads(ds.attrs.get("config_json", "{}"))["scenes"][scene]["solver"])
+    except (KeyError, TypeError, ValueError):
+        return "md"
+
+
+# Axis labels and scale factors per solver: MD in LJ reduced units; CSPH in SI, drawn as
+# V [cm³/g] (×1e3 of m³/kg), P [GPa] (×1e-9 of Pa), velocities [m/s].
+_AXES = {
+    "md": {"V": ("specific volume V [σ³]", 1.0), "P": ("longitudinal stress P_xx [ε σ⁻³]", 1.0),
+           "u_p_measured": ("particle velocity u_p [σ/τ]", 1.0),
+           "D": ("shock velocity D [σ/τ]", 1.0)},
+    "csph": {"V": ("specific volume V [cm³/g]", 1e3),
+             "P": ("longitudinal stress P = −σ_xx [GPa]", 1e-9),
+             "u_p_measured": ("particle velocity u_p [m/s]", 1.0),
+             "D": ("shock velocity D [m/s]", 1.0)},
+}  # fmt: skip
+
+
 def hugoniot_figures(
     agg: str | os.PathLike, out_pv: str | os.PathLike, out_dup: str | os.PathLike
 ) -> None:
@@ -30,10 +53,10 @@ def hugoniot_figures(
     with xr.open_dataset(agg, engine="netcdf4") as ds:
         ds = ds.load()
     scene = ds.attrs.get("scene", "")
-    for out, (xv, yv, xl, yl) in (
-        (out_pv, ("V", "P", "specific volume V [σ³]", "longitudinal stress P_xx [ε σ⁻³]")),
-        (out_dup, ("u_p_measured", "D", "particle velocity u_p [σ/τ]", "shock velocity D [σ/τ]")),
-    ):
+    solver = _solver(ds, scene)
+    axes = _AXES.get(solver, _AXES["md"])
+    for out, (xv, yv) in ((out_pv, ("V", "P")), (out_dup, ("u_p_measured", "D"))):
+        (xl, fx), (yl, fy) = axes[xv], axes[yv]
         fig, ax = plt.subplots(figsize=(5.5, 4.2), dpi=120)
         for sch in ds["scheme"].values:
             d = ds.sel(scheme=sch)
@@ -46,7 +69,9 @@ def hugoniot_figures(
                 u_set = d["u_p_set"].values if "u_p_set" in d else np.full(x.shape, np.nan)
                 x = np.where(np.isfinite(u_set), u_set, d["u_p"].values)
                 xe = np.zeros_like(x)
-            ax.errorbar(x[ok], y[ok], xerr=xe[ok], yerr=ye[ok], fmt="o", label=f"{sch} (MD)")
+            x, xe, y, ye = x * fx, xe * fx, y * fy, ye * fy
+            tag = "CSPH" if solver == "csph" else "MD"
+            ax.errorbar(x[ok], y[ok], xerr=xe[ok], yerr=ye[ok], fmt="o", label=f"{sch} ({tag})")
             if (~ok).any():
                 ax.plot(x[~ok], y[~ok], "o", mfc="none", mec="gray", label=f"{sch}, not converged")
         rx = {"V": "ref_V", "u_p_measured": "ref_u_p"}[xv]
@@ -54,17 +79,25 @@ def hugoniot_figures(
         if rx in ds and ry in ds:
             order = np.argsort(ds[rx].values)
             ax.plot(
-                ds[rx].values[order],
-                ds[ry].values[order],
+                ds[rx].values[order] * fx,
+                ds[ry].values[order] * fy,
                 "k-",
                 lw=1.2,
-                label="reference (equilibrium MD)",
+                label="reference (equilibrium MD)" if solver == "md" else "model Hugoniot",
             )
+            sx = {"V": "ref_snowplow_V", "u_p_measured": "ref_u_p"}[xv]
+            sy = {"P": "ref_snowplow_P", "D": "ref_snowplow_D"}[yv]
+            if sx in ds and sy in ds:
+                ax.plot(ds[sx].values[order] * fx, ds[sy].values[order] * fy, "k--", lw=1.0,
+                        label="snowplow limit")  # fmt: skip
         if xv == "V" and "rho0" in ds:
-            ax.plot([1.0 / float(ds["rho0"])], [float(ds["P0"])], "k*", ms=9, label="pole")
+            ax.plot([fx / float(ds["rho0"])], [fy * float(ds["P0"])], "k*", ms=9, label="pole")
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
-        ax.set_title(f"{scene}: LJ rc = {_cutoff(ds, scene)} σ")
+        if solver == "csph":
+            ax.set_title(f"{scene}: CSPH")
+        else:
+            ax.set_title(f"{scene}: LJ rc = {_cutoff(ds, scene)} σ")
         ax.legend(fontsize=8)
         fig.tight_layout()
         fig.savefig(out)
@@ -77,22 +110,31 @@ def window_history_figure(point: str | os.PathLike, out: str | os.PathLike) -> N
     with xr.open_dataset(point, engine="netcdf4") as ds:
         ds = ds.load()
     title = f"{ds.attrs.get('scene', '')} {ds.attrs.get('scheme', '')}: {ds['status'].values}"
+    # units from the file (MD: τ, σ/τ; CSPH: s, m/s)
+    tu = (
+        {"tau": "τ", "s": "s"}.get(ds["omega_t"].attrs.get("units", "tau"), "τ")
+        if "omega_t" in ds
+        else "τ"
+    )
+    vu = {"sigma tau^-1": "σ/τ", "m s^-1": "m/s"}.get(
+        ds["control_u_in"].attrs.get("units", "") if "control_u_in" in ds else "", "σ/τ"
+    )
     fig, axes = plt.subplots(3, 1, figsize=(5.5, 7.5), dpi=110, sharex=False)
     if "omega_t" in ds:
         axes[0].plot(ds["omega_t"], ds["omega_value"], ".", ms=2)
         axes[0].set_ylabel("ω = (x_f − x_lo)/L")
-        axes[0].set_xlabel("t [τ]")
+        axes[0].set_xlabel(f"t [{tu}]")
     if "control_t" in ds:
         t = ds["control_t"].values
         axes[1].errorbar(t, ds["control_a"], yerr=ds["control_a_err"], fmt="o")
         axes[1].axhline(0.0, color="k", lw=0.8)
-        axes[1].set_ylabel("a_k [1/τ]")
+        axes[1].set_ylabel(f"a_k [1/{tu}]")
         L = float(ds.attrs.get("window_length", np.nan))
         axes[2].plot(t, -ds["control_u_in"], "o-", label="D estimate −u_in (frame)")
         axes[2].plot(t, -ds["control_u_in"] + L * ds["control_a"], "x", label="−u_in + L a_k")
         axes[2].plot(t, ds["control_u_out"] - ds["control_u_in"], "s-", label="u_p = u_out − u_in")
-        axes[2].set_xlabel("t [τ]")
-        axes[2].set_ylabel("velocity [σ/τ]")
+        axes[2].set_xlabel(f"t [{tu}]")
+        axes[2].set_ylabel(f"velocity [{vu}]")
         axes[2].legend(fontsize=7)
     if "dichotomy_u_out" in ds:
         u, a = ds["dichotomy_u_out"].values, ds["dichotomy_slope"].values

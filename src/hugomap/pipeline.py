@@ -55,6 +55,10 @@ def prepare_sample(scene: dict, out: str | os.PathLike) -> Path:
     """FCC at (ρ0, T0) between two static walls, thermostatted (CSVR) for ``equilibrate_time``,
     then run without thermostat for ``pole_time`` while the pole is measured away from the
     walls: ρ0, P0 = P_xx, E0, T0 (block averages with standard errors)."""
+    if scene.get("solver") == "csph":  # contact SPH (SI units): pipeline_sph
+        from . import pipeline_sph
+
+        return pipeline_sph.prepare_sample(scene, out)
     s = scene["sample"]
     lj = _lj(scene)
     state = fcc_state(tuple(s["cells"]), s["rho0"], s["T0"], s["seed"], periodic_x=False)
@@ -131,6 +135,10 @@ def load_to_target_stage(
 ) -> Path:
     """From the prepared sample, drive a piston at ``u_p`` until the front has travelled
     ``load_fraction`` of the sample; save the complete state (the branching checkpoint)."""
+    if scene.get("solver") == "csph":
+        from . import pipeline_sph
+
+        return pipeline_sph.load_to_target_stage(sample, scene, u_p, out)
     t0, c0 = time.perf_counter(), _cpu()
     with xr.open_dataset(sample, engine="netcdf4") as ds:
         ds.load()
@@ -255,6 +263,10 @@ def piston_point(
     ``shock.checkpoint_every`` samples) lets a killed job resume where it stopped; one that
     fails its checks (format version, checksum, same loading checkpoint) is logged and
     ignored, and the run starts again from the loading checkpoint."""
+    if scene.get("solver") == "csph":
+        from . import pipeline_sph
+
+        return pipeline_sph.piston_point(loaded, scene, u_p, out, scheme)
     t0, c0 = time.perf_counter(), _cpu()
     sh = scene["shock"]
     name = scene.get("name", "")
@@ -324,7 +336,12 @@ def piston_point(
 
 
 def reference_stage(scene: dict, out: str | os.PathLike) -> Path:
-    """The equilibrium-MD reference Hugoniot of the scene's pole and potential."""
+    """The equilibrium-MD reference Hugoniot of the scene's pole and potential (a CSPH
+    scene: its material model's Hugoniot, ``pipeline_sph.reference_stage``)."""
+    if scene.get("solver") == "csph":
+        from . import pipeline_sph
+
+        return pipeline_sph.reference_stage(scene, out)
     from .analysis.reference import reference_hugoniot
 
     s, r = scene["sample"], scene["reference"]

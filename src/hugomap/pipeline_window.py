@@ -48,7 +48,12 @@ def window_start(
     and the window runs ``window.settle_time`` at that guess before it is saved;
     ω is normalised by the pole (upstream: ρ0, P0) and the shocked state measured in the new
     window (the slab between the outflow edge and the front, ``shock.gap`` clear of both).
+    A CSPH scene (1D) goes to ``pipeline_sph.window_start``.
     """
+    if scene.get("solver") == "csph":
+        from . import pipeline_sph
+
+        return pipeline_sph.window_start(loaded, scene, u_p, out)
     with xr.open_dataset(loaded, engine="netcdf4") as ds:
         ds.load()
     attrs = {"stage": "window", "u_p": u_p, "scene_config": json.dumps(scene)}
@@ -242,7 +247,12 @@ def _finish_point(
 def control_point(
     window0: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike, scheme: str
 ) -> Path:
-    """An AMW or MW point: control until steady, then average the steady state."""
+    """An AMW or MW point: control until steady, then average the steady state (a CSPH
+    scene: ``pipeline_sph.control_point``, AMW only)."""
+    if scene.get("solver") == "csph":
+        from . import pipeline_sph
+
+        return pipeline_sph.control_point(window0, scene, u_p, out, scheme)
     t0, c0 = time.perf_counter(), _cpu()
     try:
         win, sig, pole, _ = _open(window0)

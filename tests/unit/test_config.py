@@ -70,3 +70,108 @@ def test_unknown_keys_are_named() -> None:
         validate_config(copy.deepcopy(cfg))
     msg = str(ei.value)
     assert "unknown key(s) ['colour']" in msg and "unknown key(s) ['speed']" in msg
+
+
+# -- CSPH scenes (solver: csph, SI units) ---------------------------------------------------
+
+
+def copper() -> dict:
+    return yaml.safe_load((ROOT / "config/copper.yaml").read_text())
+
+
+def test_copper_config_is_valid_and_filled() -> None:
+    cfg = load_config(ROOT / "config/copper.yaml")
+    solid, porous = cfg["scenes"]["cu_solid"], cfg["scenes"]["cu_porous"]
+    eos = solid["material"]["eos"]
+    assert (eos["rho0"], eos["c0"], eos["s"], eos["gamma0"]) == (8930.0, 3940.0, 1.49, 2.0)
+    assert solid["shock"]["bin_width"] == pytest.approx(2e-5)  # 2 dx, filled from sample.dx
+    assert solid["window"]["length"] == pytest.approx(1.5e-3)  # 150 dx
+    assert porous["material"]["strength"]["model"] == "von_mises"
+    assert porous["numerics"]["dev_mean"] is True
+    assert load_config(ROOT / "tests/workflow/tiny_cu/config.yaml")["scenes"]["tiny_cu"]
+
+
+@pytest.mark.parametrize(
+    ("scene", "edit", "expect"),
+    [
+        (  # porosity beyond what random sequential addition can pack
+            "cu_porous",
+            lambda s: s["sample"]["porous"].update(distention=1.9),
+            "scenes.cu_porous.sample.porous.distention = 1.9: porosity 0.474 cannot be packed",
+        ),
+        (
+            "cu_porous",
+            lambda s: s["sample"]["porous"].update(distention=2.5),
+            "scenes.cu_porous.sample.porous.distention = 2.5: out of range; allowed range [1.0, 2.0]",
+        ),
+        (
+            "cu_porous",
+            lambda s: s["material"]["strength"].update(yield_stress=5e10),
+            "scenes.cu_porous.material.strength.yield_stress = 5e+10: must be below "
+            "material.strength.shear_modulus = 4.77e+10 Pa",
+        ),
+        (  # resolution too coarse for the smallest pore (r_min >= 3 dx)
+            "cu_porous",
+            lambda s: s["sample"].update(dx=2e-5),
+            "scenes.cu_porous.sample.porous.pore_radius = [3e-05, 6e-05]: the smallest pore is "
+            "not resolved by sample.dx = 2e-05 m; allowed r_min >= 3 dx = 6e-05 m",
+        ),
+        (
+            "cu_solid",
+            lambda s: s["sample"].update(colour="red"),
+            "scenes.cu_solid.sample: unknown key(s) ['colour']",
+        ),
+        (
+            "cu_porous",
+            lambda s: s.update(schemes=["piston", "amw"]),
+            "scenes.cu_porous.schemes = ['piston', 'amw']: amw needs dim = 1",
+        ),
+        (
+            "cu_solid",
+            lambda s: s.update(schemes=["piston", "mw"]),
+            "scenes.cu_solid.schemes[1] = 'mw': allowed values ['piston', 'amw']",
+        ),
+        (
+            "cu_solid",
+            lambda s: s["shock"].update(u_p=[-100.0]),
+            "scenes.cu_solid.shock.u_p[0] = -100.0: out of range; allowed range [1.0, 5000.0]",
+        ),
+        (
+            "cu_solid",
+            lambda s: s["window"].update(length=3e-3),
+            "scenes.cu_solid.window.length = 0.003: a window with window.front_fraction",
+        ),
+        (
+            "cu_porous",
+            lambda s: s["sample"].pop("width"),
+            "scenes.cu_porous.sample: 'width' is a required property for dim = 2",
+        ),
+    ],
+)
+def test_bad_csph_values_name_key_and_range(scene: str, edit, expect: str) -> None:
+    cfg = copper()
+    edit(cfg["scenes"][scene])
+    with pytest.raises(ConfigError) as ei:
+        validate_config(cfg)
+    assert expect in str(ei.value)
+
+
+def test_csph_scene_refuses_inherited_md_schemes() -> None:
+    cfg = copper()
+    cfg["schemes"] = ["piston", "dichotomy"]
+    del cfg["scenes"]["cu_solid"]["schemes"]
+    with pytest.raises(ConfigError) as ei:
+        validate_config(cfg)
+    assert (
+        "schemes = ['piston', 'dichotomy']: a solver = csph scene (scenes.cu_solid) runs only"
+        in (str(ei.value))
+    )
+
+
+def test_md_scene_without_solver_is_still_md() -> None:
+    """The if/then on solver leaves MD scenes (and their messages) as they were."""
+    cfg = tiny()
+    del cfg["scenes"]["tiny"]["solver"]
+    with pytest.raises(ConfigError) as ei:
+        validate_config(cfg)
+    assert "scenes.tiny: 'solver' is a required property" in str(ei.value)

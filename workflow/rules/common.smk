@@ -87,11 +87,40 @@ def _atom_steps(scene, stage):
     return 4 * r["cells"] ** 3 * steps
 
 
+# CSPH scenes (solver: csph, SI units): particles x steps at a measured-rate bound.
+SPH_S_PER_PARTICLE_STEP = 3.0e-6  # 1D ~1e-6 s, 2D porous ~2e-6 s on one core, x1.5-3
+# state, pair list (~30 neighbours in 2D), profile history
+SPH_BYTES_PER_PARTICLE = 8192
+
+
+def _sph_particles(scene):
+    s = scene["sample"]
+    n = s["length"] / s["dx"]
+    return n * (s["width"] / s["dx"] if scene["dim"] == 2 else 1.0)
+
+
+def _sph_steps(scene):
+    """Upper bound of the steps of a piston stage: the front crosses the sample at its
+    slowest speed (porous: the snowplow D = u_p alpha/(alpha - 1)) while dt is cfl dx over
+    the fastest signal (c0 + s u_p)."""
+    s, e, sh = scene["sample"], scene["material"]["eos"], scene["shock"]
+    u_lo, u_hi = min(sh["u_p"]), max(sh["u_p"])
+    d_min = e["c0"] + e["s"] * u_lo
+    if "porous" in s:
+        a = s["porous"]["distention"]
+        d_min = min(d_min, u_lo * a / max(a - 1.0, 1e-9))
+    dt = scene.get("numerics", {}).get("cfl", 0.3) * s["dx"] / (e["c0"] + e["s"] * u_hi)
+    return s["length"] / d_min / dt
+
+
 def md_mem_mb(stage):
     """mem_mb of an MD stage ("prepare", "load", "piston", "reference")."""
 
     def mem_mb(wildcards, attempt):
         scene = config["scenes"][wildcards.scene]
+        if scene["solver"] == "csph":
+            n = _sph_particles(scene)
+            return attempt * int(MD_BASE_MB + n * SPH_BYTES_PER_PARTICLE / 2**20)
         if stage == "reference":
             n, extra = 4 * scene["reference"]["cells"] ** 3, 0
         else:
@@ -106,7 +135,13 @@ def md_runtime(stage):
     """runtime [min] of an MD stage: atom-steps at the 1-core rate over the threads."""
 
     def runtime(wildcards, threads, attempt):
-        steps = _atom_steps(config["scenes"][wildcards.scene], stage)
+        scene = config["scenes"][wildcards.scene]
+        if scene["solver"] == "csph":
+            steps = 0 if stage in ("prepare", "reference") else _sph_steps(scene)
+            steps *= _sph_particles(scene)
+            minutes = MD_STARTUP_MIN + steps * SPH_S_PER_PARTICLE_STEP / threads / 60.0
+            return attempt * int(math.ceil(minutes))
+        steps = _atom_steps(scene, stage)
         minutes = MD_STARTUP_MIN + steps * MD_S_PER_ATOM_STEP / threads / 60.0
         return attempt * int(math.ceil(minutes))
 

@@ -61,6 +61,55 @@ POLE_VARS: dict[str, tuple[str, str]] = {
     "Pyy0": (P_UNIT, "pole: transverse stress P_yy of the prepared sample"),
 }
 ERR_SUFFIX = "_err"
+
+# -- units per solver ---------------------------------------------------------------------
+# MD writes Lennard-Jones reduced units (the tables above, unchanged); CSPH writes SI. The
+# CSPH tables are the MD ones with every unit translated and "number density"/"per atom"
+# read as mass density/per unit mass, plus the variables only a continuum solver has.
+SI_UNITS = {
+    "sigma tau^-1": "m s^-1", "sigma^-3": "kg m^-3", "sigma^3": "m^3 kg^-1", P_UNIT: "Pa",
+    "epsilon k_B^-1": "K", "epsilon": "J kg^-1", "tau": "s", "sigma": "m", "tau^-1": "s^-1",
+}  # fmt: skip
+_SI_TEXT = (
+    ("number density", "mass density"), ("(per atom, m = 1)", "(per unit mass)"),
+    ("(per atom)", "(per unit mass)"), ("atoms x time steps", "particles x time steps"),
+)  # fmt: skip
+CSPH_EXTRA_VARS: dict[str, tuple[str, str]] = {
+    "P_eos": ("Pa", "EOS (mean) pressure behind the front; P = P_eos - S_xx adds the deviator"),
+    "ahead_P_eos": ("Pa", "EOS pressure just ahead of the tracked front"),
+    "eps_p": ("1", "mass-mean accumulated plastic strain behind the front"),
+    "ahead_eps_p": ("1", "mass-mean accumulated plastic strain just ahead of the front"),
+}
+
+
+def _si(table: dict[str, tuple[str, str]]) -> dict[str, tuple[str, str]]:
+    out = {}
+    for k, (u, ln) in table.items():
+        for a, b in _SI_TEXT:
+            ln = ln.replace(a, b)
+        out[k] = (SI_UNITS.get(u, u), ln)
+    return out
+
+
+def solver_tables(solver: str = "md") -> tuple[dict, dict, dict[str, str]]:
+    """(point variables, pole variables, axis units) of a solver's point files: the MD
+    tables (LJ reduced units) for ``md``, SI ones for ``csph``. Axis units: ``velocity``,
+    ``time``, ``length``."""
+    if solver == "csph":
+        axes = {"velocity": "m s^-1", "time": "s", "length": "m"}
+        return {**_si(POINT_VARS), **CSPH_EXTRA_VARS}, _si(POLE_VARS), axes
+    return POINT_VARS, POLE_VARS, {"velocity": "sigma tau^-1", "time": "tau", "length": "sigma"}
+
+
+def _solver_of(scene_config: dict | str | None) -> str:
+    if isinstance(scene_config, str):
+        try:
+            scene_config = json.loads(scene_config)
+        except ValueError:
+            return "md"
+    return str((scene_config or {}).get("solver", "md"))
+
+
 POINT_TEXT = {
     "status": "ok, not_converged, or why the run stopped",
     "diagnostic": "what happened, for a failed or unconverged point",
@@ -116,17 +165,19 @@ def point_dataset(
     diagnostic: str,
     scene_config: dict,
 ) -> xr.Dataset:
-    """One Hugoniot point as a Dataset (NaN-filled where a failed run has no value)."""
-    vals = {k: values.get(k, np.nan) for k in POINT_VARS}
+    """One Hugoniot point as a Dataset (NaN-filled where a failed run has no value); units
+    from the scene's solver (``solver_tables``)."""
+    point_vars, pole_vars, axes = solver_tables(_solver_of(scene_config))
+    vals = {k: values.get(k, np.nan) for k in point_vars}
     vals.update(
         {
             k + ERR_SUFFIX: values.get(k + ERR_SUFFIX, np.nan)
-            for k in POINT_VARS
+            for k in point_vars
             if k + ERR_SUFFIX in values
         }
     )
-    data = scalar_vars(vals, POINT_VARS)
-    data.update(scalar_vars(pole, POLE_VARS))
+    data = scalar_vars(vals, point_vars)
+    data.update(scalar_vars(pole, pole_vars))
     data["converged"] = xr.Variable(
         (),
         np.int8(bool(values.get("converged", False))),
@@ -136,12 +187,12 @@ def point_dataset(
     data["diagnostic"] = xr.Variable((), str(diagnostic), {"long_name": POINT_TEXT["diagnostic"]})
     if history is not None and len(history.get("t", [])):
         data["history_t"] = xr.Variable(
-            ("sample",), history["t"], {"units": "tau", "long_name": "sample time"}
+            ("sample",), history["t"], {"units": axes["time"], "long_name": "sample time"}
         )
         data["history_front"] = xr.Variable(
             ("sample",),
             history["front"],
-            {"units": "sigma", "long_name": "front position (piston frame)"},
+            {"units": axes["length"], "long_name": "front position (piston frame)"},
         )
         data["history_stage"] = xr.Variable(
             ("sample",), history["stage"], {"units": "1", "long_name": "0 load, 1 drive"}
@@ -189,12 +240,8 @@ def aggregate_points(
     missing from some files (``_err`` values of failed points, the pole of a point whose
     loading failed) is NaN there; the pole is taken from the first point that has it.
     """
-    keep = [
-        k for k in (*POINT_VARS, *(k + ERR_SUFFIX for k in POINT_VARS)) if k != "piston_velocity"
-    ]
     if not paths:
         raise ValueError(f"scene {scene}: no point files to aggregate")
-    pole_names = [*POLE_VARS, *(k + ERR_SUFFIX for k in POLE_VARS)]
     rows: list[dict] = []
     var_attrs: dict[str, dict] = {}
     first_attrs: dict = {}
@@ -203,6 +250,11 @@ def aggregate_points(
         rows.append(values)
         if i == 0:
             first_attrs = gattrs
+    point_vars, pole_vars, axes = solver_tables(_solver_of(first_attrs.get("scene_config")))
+    keep = [
+        k for k in (*point_vars, *(k + ERR_SUFFIX for k in point_vars)) if k != "piston_velocity"
+    ]
+    pole_names = [*pole_vars, *(k + ERR_SUFFIX for k in pole_vars)]
     present = {k for r in rows for k in r}
 
     def column(k: str, fill: object = np.nan) -> np.ndarray:
@@ -228,18 +280,18 @@ def aggregate_points(
         if k in present:
             pole[k] = xr.Variable((), found[0] if found else np.nan, var_attrs[k])
     pts = pts.assign_coords(
-        u_p=("u_p", up, {"units": "sigma tau^-1", "long_name": "nominal piston velocity"})
+        u_p=("u_p", up, {"units": axes["velocity"], "long_name": "nominal piston velocity"})
     )
     out = pts.expand_dims(scheme=[scheme])
     for k, v in pole.items():
         out[k] = v
     if reference is not None:
+        model = reference.attrs.get("reference_model", "equilibrium MD")
         for name, var in reference.data_vars.items():
             out["ref_" + name] = var.rename({d: "ref_point" for d in var.dims})
             out["ref_" + name].attrs = dict(
                 var.attrs,
-                long_name="reference Hugoniot (equilibrium MD): "
-                + var.attrs.get("long_name", name),
+                long_name=f"reference Hugoniot ({model}): " + var.attrs.get("long_name", name),
             )
     out.attrs.update(provenance_attrs(config))
     out.attrs.update(scene=scene, title=f"Hugoniot of scene {scene}")

@@ -567,7 +567,7 @@ class SPHWindow:
         w = CSPHSimulation(
             new, sim.eos, sim.strength, theta=sim.theta, cfl=sim.cfl, k_comp=sim.k_comp,
             walls=(wall - lo, u_out, None, 0.0), grad_correction=sim.grad_correction,
-            skin=sim.skin, dt_floor=sim.dt_floor, escape_distance=sim.escape,
+            dev_mean=sim.dev_mean, skin=sim.skin, dt_floor=sim.dt_floor, escape_distance=sim.escape,
         )  # fmt: skip
         w.dt = sim.dt  # the last step's Δt until the window takes its own (methods read it)
         w.frozen = frozen
@@ -712,6 +712,7 @@ class SPHWindow:
                     "cfl": sim.cfl,
                     "k_comp": sim.k_comp,
                     "grad_correction": sim.grad_correction,
+                    "dev_mean": sim.dev_mean,
                     "skin": sim.skin,
                     "dt_floor": sim.dt_floor,
                     "escape": sim.escape,
@@ -751,8 +752,8 @@ class SPHWindow:
         sim = CSPHSimulation(
             st, eos, strength, theta=sol["theta"], cfl=sol["cfl"], k_comp=sol["k_comp"],
             walls=(float(walls[0]), float(walls[1]), None, 0.0),
-            grad_correction=sol["grad_correction"], skin=sol["skin"],
-            dt_floor=sol["dt_floor"], escape_distance=sol["escape"],
+            grad_correction=sol["grad_correction"], dev_mean=sol.get("dev_mean", False),
+            skin=sol["skin"], dt_floor=sol["dt_floor"], escape_distance=sol["escape"],
         )  # fmt: skip
         sim.extent = tuple(sol["extent"])
         sim.restore(arrays, sc)
