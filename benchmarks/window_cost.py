@@ -97,23 +97,39 @@ def _emit(row: dict, sink: list) -> None:
     print(json.dumps(row), flush=True)
 
 
-def _fit(x, y) -> float:
+def _fit(x, y) -> tuple[float, float]:
+    """Least squares log y = a + p log x: returns (p, a)."""
     x, y = np.log(np.asarray(x, float)), np.log(np.asarray(y, float))
     ok = np.isfinite(x) & np.isfinite(y)
     if ok.sum() < 2:
-        return float("nan")
-    return float(np.polyfit(x[ok], y[ok], 1)[0])
+        return float("nan"), float("nan")
+    p, a = np.polyfit(x[ok], y[ok], 1)
+    return float(p), float(a)
 
 
-def _cost_at(rows: list[dict], se: float, add: float = 0.0) -> float | None:
-    """CPU seconds at standard error ``se`` in P, log–log interpolation between rows."""
-    pts = sorted((r["P_err"], r["cpu_s"] + add) for r in rows if r["P_err"] > 0)
-    e = np.log([p[0] for p in pts])[::-1]
-    c = np.log([p[1] for p in pts])[::-1]
-    x = np.log(se)
-    if not (e.min() <= x <= e.max()):
-        return None
-    return float(np.exp(np.interp(x, e, c)))
+SE_TARGETS = (0.2, 0.1, 0.05, 0.02)  # standard errors of P [ε σ⁻³] for the equal-error rows
+
+
+def _laws(rows: list[dict], add: float) -> dict:
+    """cpu = C T^p and P_err = A T^(−q) fitted to one scheme's rows; the CPU seconds at
+    standard error e follow as C ((A/e)^(1/q))^p (+ the shared set-up ``add``)."""
+    T = [r["sim_time"] for r in rows]
+    p, lc = _fit(T, [r["cpu_s"] for r in rows])
+    mq, la = _fit(T, [r["P_err"] for r in rows])
+    q = -mq
+    errs = [r["P_err"] for r in rows]
+    out = {"cpu_exponent": p, "P_err_exponent": q, "cpu_s_at_P_err": {}}
+    for e in SE_TARGETS:
+        if not (q > 0.05 and np.isfinite(p)):
+            out["cpu_s_at_P_err"][f"{e:g}"] = None
+            continue
+        t = np.exp((la - np.log(e)) / q)
+        out["cpu_s_at_P_err"][f"{e:g}"] = {
+            "cpu_s": float(np.exp(lc) * t**p + add),
+            "sim_time": float(t),
+            "extrapolated": not (min(errs) <= e <= max(errs)),
+        }
+    return out
 
 
 def main() -> None:
@@ -202,22 +218,14 @@ def main() -> None:
 
 
 def _summarise(rows: list[dict], setup: float) -> list[dict]:
-    by = {s: [r for r in rows if r.get("scheme") == s and r.get("status") in ("ok", "not_converged")]
-          for s in ("piston", "amw", "mw", "dichotomy")}  # fmt: skip
     out = []
-    errs = [r["P_err"] for r in by["piston"] if r.get("P_err", 0) > 0]
-    targets = sorted(errs)
-    for s, rs in by.items():
+    for s in ("piston", "amw", "mw", "dichotomy"):
+        rs = [r for r in rows if r.get("scheme") == s and r.get("status") in ("ok", "not_converged")
+              and r.get("P_err", 0) > 0 and np.isfinite(r.get("sim_time", np.nan))]  # fmt: skip
         if len(rs) < 2:
             out.append({"summary": s, "note": "fewer than 2 usable rows"})
             continue
-        add = 0.0 if s == "piston" else setup
-        out.append({
-            "summary": s,
-            "cpu_exponent": _fit([r["sim_time"] for r in rs], [r["cpu_s"] for r in rs]),
-            "P_err_exponent": -_fit([r["sim_time"] for r in rs], [r["P_err"] for r in rs]),
-            "cpu_s_at_P_err": {f"{e:.3g}": _cost_at(rs, e, add) for e in targets},
-        })  # fmt: skip
+        out.append({"summary": s, **_laws(rs, 0.0 if s == "piston" else setup)})
     return out
 
 
