@@ -247,10 +247,10 @@ def _figure(rows: list[dict], setup: float, path: Path, machine: str) -> None:
         T = np.array([r["sim_time"] for r in rs])
         c = np.array([r["cpu_s"] + add for r in rs])
         e = np.array([r["P_err"] for r in rs])
-        p = _fit(T, [r["cpu_s"] for r in rs])
+        p, _ = _fit(T, [r["cpu_s"] for r in rs])
         ax1.loglog(T, c, m, label=f"{s}: cpu ∝ T^{p:.2f}")
-        ax2.loglog(e, c, m, label=s)
-    ax1.set_xlabel("simulated time of the point T [τ]")
+        ax2.loglog(e, c, m[0], label=s)  # markers only: errors scatter
+    ax1.set_xlabel("simulated time of the point T [τ] (loading stage excluded)")
     ax1.set_ylabel("CPU time of the point [s]")
     ax1.legend(fontsize=8)
     ax2.set_xlabel("standard error of P [ε σ⁻³]")
