@@ -135,7 +135,7 @@ def _check_inside(w: np.ndarray, margin: float) -> str | None:
     return None
 
 
-def _diverging(h: ControlHistory, z: float) -> tuple[str, str] | None:
+def _diverging(h: ControlHistory, z: float, floor: float = 0.0) -> tuple[str, str] | None:
     """Failure read from the slopes a_k that are significant (|a_k| > z s_k).
 
     A correction of gain g multiplies the front speed by (1 − g) per window (AMW: g = β),
@@ -146,7 +146,7 @@ def _diverging(h: ControlHistory, z: float) -> tuple[str, str] | None:
       that does not decay (AMW's β = 2; an MW whose gains and response delay ring).
     AMW with β ∈ (1, 2) overshoots but decays (|1 − β| < 1) and is not flagged."""
     a, se = np.asarray(h.a), np.asarray(h.a_err)
-    significant = np.abs(a) > z * se
+    significant = (np.abs(a) > z * se) & (np.abs(a) > floor)
     sig = a[significant]
     if a.size >= 3 and significant[-3:].all():
         x = a[-3:]
@@ -195,9 +195,14 @@ def _control(
     ``max_drift`` [velocity]: the front-speed resolution z s_a L a calm window must reach.
     A window whose slope is 'zero' only because its error is huge proves nothing; when
     ``calm_windows`` windows in a row are calm by the slope test but coarser than
-    ``max_drift``, the run stops as ``too_noisy`` (a longer averaging window is needed)."""
+    ``max_drift``, the run stops as ``too_noisy`` (a longer averaging window is needed).
+    Conversely a front speed L|a| below ``0.1 max_drift`` counts as calm even when s_a is
+    smaller still: long windows resolve a slow wander of the front (0.05 σ/τ at u_p = 3 in
+    6-τ windows) that moves it a fraction of a σ over the average and does not bias D,
+    which is measured over the average itself."""
     h = history or ControlHistory()
     L = solver.geom.length
+    floor = 0.0 if max_drift is None else 0.1 * max_drift / L  # on a [1/time]
     calm = coarse = 0
     slopes = CorrelatedSlope()
     for k in range(max_windows):
@@ -207,7 +212,7 @@ def _control(
         if bad:
             _record(h, solver, t, w, a, se, 0.0)
             return ControlResult(False, "front_left_window", bad, k + 1), h
-        still = abs(a) <= z * se
+        still = abs(a) <= max(z * se, floor)
         fine = max_drift is None or z * se * L <= max_drift
         calm = calm + 1 if still and fine else 0
         coarse = coarse + 1 if still and not fine else 0
@@ -222,7 +227,7 @@ def _control(
                 f"drift speed {max_drift:.3g} in {coarse} windows: lengthen window_time",
                 k + 1,
             ), h  # fmt: skip
-        failed = _diverging(h, z)
+        failed = _diverging(h, z, floor)
         if failed:
             return ControlResult(False, failed[0], failed[1], k + 1), h
         apply(du)
