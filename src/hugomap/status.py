@@ -70,6 +70,7 @@ FAILURES: dict[str, tuple[str, str]] = {
     "oscillating": ("control", "the front speed oscillates without decaying"),
     "diverged": ("control", "the corrections grow (gain too large)"),
     "too_noisy": ("control", "the averaging window cannot resolve the front speed"),
+    "no_shock": ("control", "MW lowered the amplitude to nothing: the held D is below c0"),
     "bracket_not_found": ("dichotomy", "<domega/dt> kept one sign over every trial"),
     "max_iterations": ("dichotomy", "the bracket was still too wide at the iteration limit"),
 }
