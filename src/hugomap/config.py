@@ -265,7 +265,7 @@ K_RESOLUTION = 3.0
 RSA_JAMMING = 0.547
 #: Particles a CSPH sample must hold along x (front tracking, slabs, window).
 MIN_COLUMNS = 40
-#: Frozen inflow particles of the 1D window (``sph.simulation.SPHWindow.from_piston``).
+#: Frozen inflow particles of the 1D window (``sph.window.SPHWindow.from_piston``).
 WINDOW_INFLOW = 8
 
 

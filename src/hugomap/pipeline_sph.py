@@ -52,8 +52,9 @@ from .io.atomic import write_netcdf
 from .io.dataset import point_dataset, scalar_vars, solver_tables
 from .sph import checkpoint as ckpt
 from .sph.sample import Sample, SampleError, lattice_1d, lattice_2d, porous_2d
-from .sph.simulation import CSPHSimulation, SPHUnstable, SPHWindow, profile_fields
+from .sph.simulation import CSPHSimulation, SPHUnstable, profile_fields
 from .sph.state import SPHState
+from .sph.window import SPHWindow
 from .strength import Strength
 
 log = logging.getLogger("hugomap")

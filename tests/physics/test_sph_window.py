@@ -20,8 +20,9 @@ import pytest
 
 from hugomap.eos import copper
 from hugomap.eos.mie_gruneisen import hugoniot_state
-from hugomap.sph.simulation import CSPHSimulation, SPHWindow
+from hugomap.sph.simulation import CSPHSimulation
 from hugomap.sph.state import SPHState
+from hugomap.sph.window import SPHWindow
 from hugomap.window.methods import OmegaSignal, amw
 
 DX = 1e-5

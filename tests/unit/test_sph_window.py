@@ -13,8 +13,9 @@ import pytest
 
 from hugomap.eos import copper
 from hugomap.md.simulation import CheckpointError
-from hugomap.sph.simulation import CSPHSimulation, SPHWindow
+from hugomap.sph.simulation import CSPHSimulation
 from hugomap.sph.state import SPHState
+from hugomap.sph.window import SPHWindow
 
 DX = 1e-5
 UP = 500.0
@@ -72,7 +73,7 @@ def test_checkpoint_continues_bit_for_bit(tmp_path):
 def test_altered_checkpoint_refused(tmp_path):
     w = _window()
     ds = w.to_dataset()
-    ds["rho"].values[3] *= 1.0000001
+    ds["sim_rho"].values[3] *= 1.0000001  # the simulation inside (sph.checkpoint layout)
     with pytest.raises(CheckpointError, match="checksum"):
         SPHWindow.from_dataset(ds, "mem")
     ds = w.to_dataset()
