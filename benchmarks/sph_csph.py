@@ -29,20 +29,11 @@ import subprocess
 import sys
 import time
 
+import md_lj  # benchmarks/ is on sys.path when a script here runs
+
 PYSPH_1T = 9.0e-6
 PYSPH_2T = 5.6e-6
 TARGET_1T = 3.0e-6
-
-
-def _cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def _scene(nx: int, ny: int):
@@ -100,7 +91,11 @@ def main() -> None:
     if a.worker:
         print(json.dumps(worker(a.nx, a.ny, a.warm, a.steps)))
         return
-    machine = {"platform": platform.platform(), "cpu": _cpu_model(), "cpus": os.cpu_count()}
+    machine = {
+        "platform": platform.platform(),
+        "cpu": md_lj.machine()["cpu"],
+        "cpus": os.cpu_count(),
+    }
     best: dict[int, dict] = {}
     for _ in range(a.repeat):
         for t in a.threads:

@@ -41,6 +41,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import md_lj  # benchmarks/ is on sys.path when a script here runs
 import numpy as np
 import xarray as xr
 
@@ -49,15 +50,8 @@ AVERAGES = (5.0, 10.0, 20.0, 40.0)
 
 
 def _machine() -> str:
-    model = ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{platform.node()} {model} {os.cpu_count()} cpus, {platform.python_version()}"
+    m = md_lj.machine()  # md_lj's: the CPU model from /proc/cpuinfo and the usable cores
+    return f"{platform.node()} {m['cpu']} {m['nproc']} cpus, {platform.python_version()}"
 
 
 def _scene(nx: int, average_time: float = 10.0) -> dict:
