@@ -26,7 +26,7 @@ from .md.simulation import MDSimulation, SolverUnstable
 from .md.window import MDWindow, WindowError, make_reservoir
 from .pipeline import _cpu, _failure, _history_from, _pole_from
 from .window import dichotomy as dich
-from .window.methods import ControlHistory, ControlResult, OmegaSignal, amw, fixed_run, mw
+from .window.methods import ControlHistory, OmegaSignal, amw, fixed_run, mw
 
 log = logging.getLogger("hugomap")
 
@@ -272,15 +272,6 @@ def control_point(
             result, hist = mw(
                 win, sig, gain_rate=w["mw"]["gain_rate"],
                 gain_position=w["mw"]["gain_position"], target=w["front_fraction"], **common,
-            )  # fmt: skip
-        if result.converged and win.u_out - win.u_in < 0.25 * u_p:
-            # MW holds D; below the sound speed no shock matches it, and MW lowers the
-            # amplitude towards nothing (weak shocks whose loading D guess fell below c0).
-            result = ControlResult(
-                False, "no_shock",
-                f"MW lowered the amplitude u_out - u_in to {win.u_out - win.u_in:.3g} "
-                f"(started at {u_p:.3g}): the held D = {-win.u_in:.4g} has no shock",
-                result.windows,
             )  # fmt: skip
         if not result.converged:
             return _finish_point(out, scheme, scene, u_p, pole, win, {}, None, hist,

@@ -168,3 +168,13 @@ def test_slope_error_is_honest_for_correlated_noise():
     assert ok_ols / 400 < 0.6  # the problem is real
     assert rho == pytest.approx(phi, abs=0.05)
     assert ok_cor / 400 >= 0.88
+
+
+def test_mw_holding_a_speed_below_c0_is_marked_no_shock():
+    """MW holds D; with D = c0 − 1 no shock matches (the linear model's amplitude would be
+    −1/s): MW must not write the rarefaction it steers to as a point."""
+    f = _front(-(C0 - 1.0), -(C0 - 1.0) + 2.0)
+    res, _ = mw(f, _signal(f), gain_rate=0.4, gain_position=0.1, target=0.6,
+                window_time=T_WIN, calm_windows=3, max_windows=40, every=EVERY)  # fmt: skip
+    assert res.status == "no_shock", res
+    assert f.u_out - f.u_in < 0.5  # it did lower the amplitude

@@ -282,17 +282,31 @@ def mw(
     on_window: Callable[[], None] | None = None,
     max_drift: float | None = None,
 ) -> tuple[ControlResult, ControlHistory]:
-    """MW (module docstring): the inflow is held and u_out is steered."""
+    """MW (module docstring): the inflow is held and u_out is steered.
+
+    A run that settles with the amplitude u_out − u_in below a quarter of its start ends as
+    ``no_shock``: MW holds D, and below the sound speed no shock matches it, so MW lowers the
+    amplitude towards nothing (weak shocks whose loading D guess fell below c0)."""
     L = solver.geom.length
+    u_p0 = solver.u_out - solver.u_in
 
     def correction(a: float, w: np.ndarray) -> float:
         return -gain_rate * L * a - gain_position * L * (float(np.mean(w)) - target)
 
-    return _control(
+    result, h = _control(
         solver, signal, correction, lambda du: solver.set_outflow(solver.u_out + du),
         window_time, calm_windows, max_windows, every, z, edge_margin, history, on_window,
         max_drift,
     )  # fmt: skip
+    amplitude = solver.u_out - solver.u_in
+    if result.converged and amplitude < 0.25 * u_p0:
+        result = ControlResult(
+            False, "no_shock",
+            f"MW lowered the amplitude u_out - u_in to {amplitude:.3g} (started at "
+            f"{u_p0:.3g}): the held D = {-solver.u_in:.4g} has no shock",
+            result.windows,
+        )  # fmt: skip
+    return result, h
 
 
 def fixed_run(
