@@ -34,7 +34,8 @@ PROFILE = ROOT / "workflow" / "profiles" / "slurm"
 # Without accounting, the executor's default `sacct` polling hangs (../shared/FACTS.md):
 # poll with squeue, which sees finished jobs for the cluster's MinJobAge (300 s >= 3 x 2 s).
 NO_ACCOUNTING = ("--slurm-no-account", "--slurm-status-command", "squeue",
-                 "--slurm-init-seconds-before-status-checks", "2")  # fmt: skip
+                 "--slurm-init-seconds-before-status-checks", "2",
+                 "--seconds-between-status-checks", "1")  # fmt: skip
 COST = ["wall_s", "cpu_s"]  # measured time: differs between any two runs
 MD_RULES = {"prepare_sample": 1, "reference": 1, "load_to_target": 2, "piston_point": 2}
 # sbatch --comment of a job: rule_<rule>[_wildcards_<values joined by _>]
