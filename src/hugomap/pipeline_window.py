@@ -296,7 +296,7 @@ def _dich_params(scene: dict) -> dich.DichotomyParams:
     d = scene["window"]["dichotomy"]
     return dich.DichotomyParams(
         half_width=d["half_width"], growth=d["growth"], max_expansions=d["max_expansions"],
-        max_iterations=d["max_iterations"], tolerance=d["tolerance"],
+        max_iterations=d["max_iterations"], tolerance=d["tolerance"], z=scene["window"]["z"],
     )  # fmt: skip
 
 

@@ -69,7 +69,10 @@ FAILURES: dict[str, tuple[str, str]] = {
     "never_steady": ("control", "the slope of omega never stayed zero"),
     "oscillating": ("control", "the front speed oscillates without decaying"),
     "diverged": ("control", "the corrections grow (gain too large)"),
-    "too_noisy": ("control", "the averaging window cannot resolve the front speed"),
+    "too_noisy": (
+        "control",
+        "the averaging window (AMW, MW) or trial (dichotomy) cannot resolve the front speed",
+    ),
     "no_shock": ("control", "MW lowered the amplitude to nothing: the held D is below c0"),
     "bracket_not_found": ("dichotomy", "<domega/dt> kept one sign over every trial"),
     "max_iterations": ("dichotomy", "the bracket was still too wide at the iteration limit"),
