@@ -267,6 +267,8 @@ RSA_JAMMING = 0.547
 MIN_COLUMNS = 40
 #: Frozen inflow particles of the 1D window (``sph.window.SPHWindow.from_piston``).
 WINDOW_INFLOW = 8
+#: Schemes a CSPH scene runs, by dim: the window (``sph.window.SPHWindow``) is 1D only.
+CSPH_SCHEMES = {1: ("piston", "amw", "mw", "dichotomy"), 2: ("piston",)}
 
 
 def fill_csph_defaults(sc: dict) -> None:
@@ -290,17 +292,15 @@ def _csph_checks(base: str, sc: dict, top_schemes: list) -> list[str]:
     dx, length, dim = smp["dx"], smp["length"], sc["dim"]
     fill_csph_defaults(sc)
     schemes = sc.get("schemes", top_schemes)
-    other = [s for s in schemes if s not in ("piston", "amw")]
+    allowed = list(CSPH_SCHEMES[dim])
+    other = [s for s in schemes if s not in allowed]
     if other:
         where = f"{base}.schemes" if "schemes" in sc else "schemes"
+        why = " (the CSPH window is 1D)" if dim != 1 else ""
+        own = "" if "schemes" in sc else "; give the scene its own schemes"
         out.append(
-            f"{where} = {_show(schemes)}: a solver = csph scene ({base}) runs only "
-            "['piston', 'amw']; give the scene its own schemes"
-        )
-    if "amw" in schemes and dim != 1:
-        out.append(
-            f"{base}.schemes = {_show(schemes)}: amw needs dim = 1 (the CSPH window is 1D); "
-            f"allowed for dim = {dim}: ['piston']"
+            f"{where} = {_show(schemes)}: {_show(other)} not available for a solver = csph "
+            f"scene with dim = {dim} ({base}){why}; allowed: {_show(allowed)}{own}"
         )
     if st["model"] == "von_mises" and st["yield_stress"] >= st["shear_modulus"]:
         out.append(
@@ -382,7 +382,16 @@ def _csph_checks(base: str, sc: dict, top_schemes: list) -> list[str]:
             f"{base}.shock.bin_width = {sh['bin_width']:.4g}: at most a quarter of "
             f"shock.avg_length = {sh['avg_length']:.4g} m"
         )
-    if "amw" in schemes and dim == 1:
+    windowed = [s for s in schemes if s != "piston"]
+    if "dichotomy" in windowed and dim == 1:
+        d = w["dichotomy"]
+        if d["tolerance"] >= 2.0 * d["half_width"]:
+            out.append(
+                f"{base}.window.dichotomy.tolerance = {d['tolerance']:g}: must be below the "
+                f"initial bracket width 2 window.dichotomy.half_width = "
+                f"{2.0 * d['half_width']:g} m/s; allowed range (0, {2.0 * d['half_width']:g}) m/s"
+            )
+    if windowed and dim == 1:
         Lw, ff = w["length"], w["front_fraction"]
         u_max = max(sh["u_p"])
         D = eos["c0"] + eos["s"] * u_max
@@ -394,6 +403,14 @@ def _csph_checks(base: str, sc: dict, top_schemes: list) -> list[str]:
                 f"does not fit around the front at the end of loading (room {room_behind:.4g} m "
                 f"behind it at u_p = {u_max:g} m/s, {room_ahead:.4g} m ahead); shorten it or "
                 "lengthen sample.length"
+            )
+        slab = 2.0 * sh["gap"] + sh["avg_length"]
+        if ff * Lw < slab * (1 - 1e-12):
+            out.append(
+                f"{base}.window.front_fraction = {ff:g}: the front starts {ff * Lw:.4g} m from "
+                f"the outflow edge of window.length = {Lw:.4g} m, less than the averaged slab "
+                f"behind it needs, 2 shock.gap + shock.avg_length = {slab:.4g} m; allowed range "
+                f"[{slab / Lw:.4g}, 0.8] (or a longer window)"
             )
     return out
 

@@ -2,10 +2,11 @@
 (m, s, kg, Pa, J/kg; 1D per unit cross-section, 2D plane strain per metre of depth).
 
 prepare_sample → load_to_target_stage (checkpoint) → piston_point, and for 1D scenes
-window_start → control_point (AMW through ``window.methods.amw`` unchanged, on ``SPHWindow``);
-reference_stage gives the model's own Hugoniot. ``pipeline`` and ``pipeline_window`` dispatch
-here on the scene's ``solver``. Point files have the MD layout (``io.dataset.point_dataset``)
-with SI units.
+window_start → control_point (AMW and MW: ``window.methods.amw``/``mw`` unchanged, on
+``SPHWindow``) and window_start → dichotomy_state ⇄ dichotomy_trial → dichotomy_point (the loop
+of ``window.dichotomy``, trials by ``window.methods.fixed_run``); reference_stage gives the
+model's own Hugoniot. ``pipeline`` and ``pipeline_window`` dispatch here on the scene's
+``solver``. Point files have the MD layout (``io.dataset.point_dataset``) with SI units.
 
 Piston (lab frame): the sample at rest, the left wall (the piston) moves at u_p from t = 0, the
 far end is free. Every ``shock.sample_every`` steps the profile along x (bins of
@@ -48,7 +49,7 @@ import xarray as xr
 from .analysis.stats import CorrelatedSlope, block_average, line_fit
 from .config import fill_csph_defaults
 from .eos import EOS
-from .io.atomic import write_netcdf
+from .io.atomic import write_json, write_netcdf
 from .io.dataset import point_dataset, scalar_vars, solver_tables
 from .sph import checkpoint as ckpt
 from .sph.sample import Sample, SampleError, lattice_1d, lattice_2d, porous_2d
@@ -56,6 +57,8 @@ from .sph.simulation import CSPHSimulation, SPHUnstable, profile_fields
 from .sph.state import SPHState
 from .sph.window import SPHWindow
 from .strength import Strength
+from .window import dichotomy as dich
+from .window.methods import OmegaSignal, amw, fixed_run, mw
 
 log = logging.getLogger("hugomap")
 TWO_WAVE_FRACTION = 0.05  # the state ahead carries > 5 % of P (and u): an elastic precursor
@@ -555,11 +558,23 @@ def _control_vars(c) -> dict:
     return out
 
 
+class SlabError(Exception):
+    """A window measurement without its slab behind the front (``status``, ``diagnostic``)."""
+
+    def __init__(self, status: str, diagnostic: str):
+        super().__init__(f"{status}: {diagnostic}")
+        self.status, self.diagnostic = status, diagnostic
+
+
 def steady_state(win: SPHWindow, scene: dict, pole: dict, duration: float, signal) -> dict:
     """Average the steady wave in the window frame for ``duration`` [s]: per sample the
     profile from x_lo, the front (velocity through (u_in + u_out)/2), the slabs behind and
     ahead of it; D = −u_in + L dω/dt (``stats.CorrelatedSlope``), the tracker's D kept as
-    D_front; u_p_set = u_out − u_in."""
+    D_front; u_p_set = u_out − u_in. A particle count that never changes over the average
+    (the front moved less than one particle's worth) gets the error of that quantum instead
+    of the fit's 0. A sample's slab behind the front counts when it spans
+    at least avg_length/2 clear of x_lo + gap; fewer than half the samples with one raise
+    ``SlabError`` (status too_few_samples: the front sat too close to the outflow edge)."""
     sh, w = scene["shock"], scene["window"]
     bw, gap, avg = sh["bin_width"], sh["gap"], sh["avg_length"]
     g = win.geom
@@ -573,14 +588,29 @@ def steady_state(win: SPHWindow, scene: dict, pole: dict, duration: float, signa
         xf = front_position(f, g.x_lo, bw, win.u_out, win.u_in)
         t.append(win.time)
         fr.append(xf)
-        if np.isfinite(xf):
-            beh = slab_state(sums, g.x_lo, bw, max(g.x_lo + gap, xf - gap - avg), xf - gap)
+        a, b = max(g.x_lo + gap, xf - gap - avg), xf - gap
+        if np.isfinite(xf) and b - a >= 0.5 * avg:
+            beh = slab_state(sums, g.x_lo, bw, a, b)
             ahd = slab_state(sums, g.x_lo, bw, xf + gap, min(xf + gap + avg, g.x_hi))
             if beh is not None:
                 slabs.append((beh, ahd))
-    t = np.asarray(t)
-    a, se, _ = CorrelatedSlope().fit(t, np.asarray(om))
+    if len(slabs) < max(8, n // 2):
+        raise SlabError(
+            "too_few_samples",
+            f"{len(slabs)} of {n} samples have a slab of at least shock.avg_length/2 behind "
+            f"the front (front at {np.nanmedian(fr):.4g} m from x_lo, needs 2 shock.gap + "
+            f"shock.avg_length/2 = {2 * gap + 0.5 * avg:.4g} m): move window.front_fraction "
+            "up or lengthen the window",
+        )  # fmt: skip
+    t, om = np.asarray(t), np.asarray(om)
+    a, se, _ = CorrelatedSlope().fit(t, om)
     D = -win.u_in + g.length * a
+    if np.ptp(om) == 0 and signal.kind == "N":
+        # The particle count never changed: the front moved less than one particle's worth,
+        # L/(q_sh − q_up) [m], and the fit's error (0) says nothing. Take that quantum's
+        # uncertainty over the average (two ends uniform within it: std quantum/√6).
+        quantum = g.length / abs(signal.q_sh - signal.q_up)
+        se = quantum / (np.sqrt(6.0) * g.length * max(t[-1] - t[0], 1e-300))
     v = analyse(t, np.asarray(fr), slabs, pole, win.u_in, (D, g.length * se),
                 sh["residual_tol"])  # fmt: skip
     af, sf, _ = CorrelatedSlope().fit(t, np.asarray(fr))
@@ -589,39 +619,87 @@ def steady_state(win: SPHWindow, scene: dict, pole: dict, duration: float, signa
     return v
 
 
+def _mw_gains(scene: dict, window_time: float) -> tuple[float, float]:
+    """MW's (gain_rate [-], gain_position [1/s]) from the scene's dimensionless ``window.mw``
+    gains. ``window.methods.mw`` applies Δu_out = −g_v L a_k − g_x L (ω̄_k − ω*) once per
+    averaging window; with g_x = gain_position/window_time [1/s] a front off its target by
+    δx = L (ω̄ − ω*) moves the outflow by gain_position δx/window_time per window, so the
+    front's return (s Δu_out per window_time, D = c0 + s u_p) does not depend on the units or
+    the window's length (the MD scenes give g_x in 1/τ directly)."""
+    g = scene["window"]["mw"]
+    return float(g["gain_rate"]), float(g["gain_position"]) / window_time
+
+
+def _load(path: str | os.PathLike) -> xr.Dataset:
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        ds.load()
+    return ds
+
+
+def _window_point(
+    out, scheme: str, scene: dict, u_p: float, pole: dict, win: SPHWindow | None,
+    values: dict, status: str, diagnostic: str, cost: dict, extra_vars: dict | None = None,
+) -> Path:  # fmt: skip
+    """Write a window point: ``values`` with ``cost`` (wall_s, cpu_s [s], atom_steps: this
+    job's and its earlier jobs', loading and trials included) and ``extra_vars`` as is."""
+    if status not in ("ok", "not_converged"):
+        log.error("%s: %s", status, diagnostic)
+    values = {**values, **cost, "piston_velocity": u_p}
+    ds = point_dataset(values, pole, None, scheme, scene.get("name", ""), status, diagnostic,
+                       scene)  # fmt: skip
+    if extra_vars:
+        ds = ds.assign(extra_vars)
+    if win is not None:
+        ds.attrs.update(u_in=win.u_in, u_out=win.u_out, window_length=win.geom.length)
+    return write_netcdf(ds, out)
+
+
+def _cost(t0: float, c0: float, atom_steps: float, *prior: dict) -> dict[str, float]:
+    """This job's wall/CPU seconds since (t0, c0) and ``atom_steps``, plus ``prior``'s."""
+    c = {"wall_s": time.perf_counter() - t0, "cpu_s": _cpu() - c0, "atom_steps": atom_steps}
+    for p in prior:
+        for k in c:
+            c[k] += float(p.get(k, 0.0))
+    return c
+
+
 def control_point(
     window0: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike, scheme: str
 ) -> Path:
-    """An AMW point on the 1D CSPH window: ``window.methods.amw`` until steady, then the
-    steady average (``steady_state``)."""
-    from .window.methods import OmegaSignal, amw
-
+    """An AMW or MW point on the 1D CSPH window: ``window.methods.amw`` (the amplitude u_p =
+    u_out − u_in held, the frame shifted by −β L a_k) or ``window.methods.mw`` (the inflow,
+    so D = −u_in from the loading stage's guess, held and u_out steered by
+    ``_mw_gains``) until steady, then the steady average (``steady_state``). MW's amplitude
+    settles to the u_p whose shock runs at the held D: its point is (D, u_p_set), to be read
+    against the EOS line D = c0 + s u_p, not against the nominal u_p."""
     fill_csph_defaults(scene)
     t0, c0 = time.perf_counter(), _cpu()
-    name = scene.get("name", "")
-    base = {"piston_velocity": u_p}
-    with xr.open_dataset(window0, engine="netcdf4") as ds:
-        ds.load()
+    ds = _load(window0)
     if ds.attrs.get("status", "ok") != "ok":
-        return write_netcdf(point_dataset(base, {}, None, scheme, name, ds.attrs["status"],
-                                          ds.attrs.get("diagnostic", ""), scene), out)  # fmt: skip
-    if scheme != "amw":
-        return write_netcdf(point_dataset(base, {}, None, scheme, name, "bad_config",
-                                          f"scheme {scheme} is not built for csph", scene), out)  # fmt: skip
+        return _window_point(out, scheme, scene, u_p, {}, None, {}, ds.attrs["status"],
+                             ds.attrs.get("diagnostic", ""), {})  # fmt: skip
+    if scheme not in ("amw", "mw"):
+        return _window_point(out, scheme, scene, u_p, {}, None, {}, "bad_config",
+                             f"scheme {scheme} is not a control scheme (amw, mw)", {})  # fmt: skip
     win = SPHWindow.from_dataset(ds, window0)
     sig = OmegaSignal(**json.loads(ds.attrs["omega_signal"]))
     pole = json.loads(ds.attrs["pole"])
     w = scene["window"]
     wt, avg_t = _window_times(scene, u_p)
     steps0 = win.sim.steps
-    values, hist = dict(base), None
+    values, hist = {}, None
     status, diagnostic = "ok", ""
+    common = dict(
+        window_time=wt, calm_windows=w["calm_windows"], max_windows=w["max_windows"],
+        every=w["sample_every"], z=w["z"], max_drift=w["drift_fraction"] * win.geom.length / avg_t,
+    )  # fmt: skip
     try:
-        res, hist = amw(
-            win, sig, beta=w["amw"]["beta"], window_time=wt, calm_windows=w["calm_windows"],
-            max_windows=w["max_windows"], every=w["sample_every"], z=w["z"],
-            max_drift=w["drift_fraction"] * win.geom.length / avg_t,
-        )  # fmt: skip
+        if scheme == "amw":
+            res, hist = amw(win, sig, beta=w["amw"]["beta"], **common)
+        else:
+            g_rate, g_pos = _mw_gains(scene, wt)
+            res, hist = mw(win, sig, gain_rate=g_rate, gain_position=g_pos,
+                           target=w["front_fraction"], **common)  # fmt: skip
         if not res.converged:
             status, diagnostic = res.status, res.diagnostic
         else:
@@ -629,21 +707,131 @@ def control_point(
             values.update(v)
             status = v["status"]
             diagnostic = "" if status == "ok" else _residual_text(v)
-            log.info("amw: D = %.2f +- %.2f m/s, P = %.5g Pa, %s", v["D"], v["D_err"], v["P"],
-                     _residual_text(v))  # fmt: skip
-    except SPHUnstable as exc:
+            log.info("%s: D = %.2f +- %.2f m/s, u_p = %.2f m/s, P = %.5g Pa, %s", scheme,
+                     v["D"], v["D_err"], v["u_p_set"], v["P"], _residual_text(v))  # fmt: skip
+    except (SPHUnstable, SlabError) as exc:
         status, diagnostic = exc.status, exc.diagnostic
-    if status not in ("ok", "not_converged"):
-        log.error("%s: %s", status, diagnostic)
-    prior = json.loads(ds.attrs.get("cost", "{}"))
-    values["wall_s"] = time.perf_counter() - t0 + prior.get("wall_s", 0.0)
-    values["cpu_s"] = _cpu() - c0 + prior.get("cpu_s", 0.0)
-    values["atom_steps"] = win.n_particles * (win.sim.steps - steps0) + prior.get("atom_steps", 0.0)
-    ds_out = point_dataset(values, pole, None, scheme, name, status, diagnostic, scene)
-    if hist is not None and hist.t:
-        ds_out = ds_out.assign(_control_vars(hist))
-    ds_out.attrs.update(u_in=win.u_in, u_out=win.u_out, window_length=win.geom.length)
-    return write_netcdf(ds_out, out)
+    cost = _cost(t0, c0, float(win.n_particles * (win.sim.steps - steps0)),
+                 json.loads(ds.attrs.get("cost", "{}")))  # fmt: skip
+    extra = _control_vars(hist) if hist is not None and hist.t else None
+    return _window_point(out, scheme, scene, u_p, pole, win, values, status, diagnostic, cost,
+                         extra)  # fmt: skip
+
+
+# -- the dichotomy on the 1D window ---------------------------------------------------------
+
+
+def _dichotomy_times(scene: dict, u_p: float) -> tuple[float, float]:
+    """(trial_time, final_time) [s]: configured, or window_time and average_time
+    (``_window_times``): a trial lasts as long as one AMW/MW averaging window, the final
+    average as long as theirs."""
+    d = scene["window"]["dichotomy"]
+    wt, avg_t = _window_times(scene, u_p)
+    return d.get("trial_time") or wt, d.get("final_time") or avg_t
+
+
+def dichotomy_state(
+    window0: str | os.PathLike, scene: dict, k: int, previous: str | None, trials: list[str],
+    out: str | os.PathLike,
+) -> Path:  # fmt: skip
+    """Iteration k of the dichotomy's loop state on the CSPH window (``window.dichotomy``):
+    k = 0 proposes the bracket u_out0 ± half_width [m/s] around the window checkpoint's u_out
+    (its ``window`` attribute); k ≥ 1 folds in the trials run on iteration k − 1's proposals."""
+    fill_csph_defaults(scene)
+    p = dich.params_from_config(scene["window"])
+    if k == 0:
+        with xr.open_dataset(window0, engine="netcdf4") as ds:
+            attrs = dict(ds.attrs)
+        status = attrs.get("status", "ok")
+        if status != "ok":
+            s = dich.initial_state(float("nan"), p)
+            s.update(done=True, status=status, reason=attrs.get("diagnostic", ""), pending=[])
+            return write_json(s, out)
+        return write_json(dich.initial_state(float(json.loads(attrs["window"])["u_out"]), p), out)
+    prev = json.loads(Path(previous).read_text())
+    new = [json.loads(Path(f).read_text()) for f in trials]
+    return write_json(dich.update(prev, new, p), out)
+
+
+def dichotomy_trial(
+    window0: str | os.PathLike, scene: dict, state: str, index: int, out: str | os.PathLike
+) -> Path:
+    """One trial: from the window checkpoint shifted to u_out = state.pending[index] [m/s]
+    (a Galilean shift: u_p = u_out − u_in held, the frame moves), run ``trial_time``
+    (``_dichotomy_times``) and fit ⟨dω/dt⟩ [1/s] (``window.methods.fixed_run``)."""
+    fill_csph_defaults(scene)
+    t0, c0 = time.perf_counter(), _cpu()
+    u_out = float(json.loads(Path(state).read_text())["pending"][index])
+    ds = _load(window0)
+    if ds.attrs.get("status", "ok") != "ok":
+        r = {"u_out": u_out, "slope": float("nan"), "status": ds.attrs["status"],
+             "diagnostic": ds.attrs.get("diagnostic", "")}  # fmt: skip
+        return write_json({**r, **_cost(t0, c0, 0.0)}, out)
+    win = SPHWindow.from_dataset(ds, window0)
+    sig = OmegaSignal(**json.loads(ds.attrs["omega_signal"]))
+    trial_time, _ = _dichotomy_times(scene, float(ds.attrs["u_p"]))
+    win.galilean_shift(u_out - win.u_out)
+    steps0 = win.sim.steps
+    try:
+        r = fixed_run(win, sig, trial_time, scene["window"]["sample_every"])
+    except SPHUnstable as exc:
+        # no slope: dichotomy.update counts it on the negative side (window too fast)
+        r = {"u_out": u_out, "slope": float("nan"), "status": exc.status,
+             "diagnostic": exc.diagnostic}  # fmt: skip
+        log.error("%s: %s", exc.status, exc.diagnostic)
+    r = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in r.items()}
+    log.info("trial u_out = %.3f m/s: front velocity %s m/s, %s", u_out,
+             r.get("front_velocity"), r["status"])  # fmt: skip
+    return write_json({**r, **_cost(t0, c0, float(win.n_particles * (win.sim.steps - steps0)))},
+                      out)  # fmt: skip
+
+
+def dichotomy_point(
+    window0: str | os.PathLike, scene: dict, u_p: float, state: str, trials: list[str],
+    out: str | os.PathLike,
+) -> Path:  # fmt: skip
+    """The dichotomy's point: at the root u_out [m/s] of the bisection (the window frame
+    shifted there, u_p held), the steady average over ``final_time`` (``steady_state``). The
+    cost adds the loading stage's and every trial's; the trials' (u_out, ⟨dω/dt⟩) are kept as
+    ``dichotomy_u_out``, ``dichotomy_slope``."""
+    fill_csph_defaults(scene)
+    t0, c0 = time.perf_counter(), _cpu()
+    scheme = "dichotomy"
+    s = json.loads(Path(state).read_text())
+    prior = [json.loads(Path(f).read_text()) for f in trials]
+    ds = _load(window0)
+    if ds.attrs.get("status", "ok") != "ok":
+        return _window_point(out, scheme, scene, u_p, {}, None, {}, ds.attrs["status"],
+                             ds.attrs.get("diagnostic", ""), _cost(t0, c0, 0.0, *prior))  # fmt: skip
+    pole = json.loads(ds.attrs["pole"])
+    load_cost = json.loads(ds.attrs.get("cost", "{}"))
+    bis = np.array([[t["u_out"], t.get("slope", np.nan)] for t in s["trials"]], dtype=float)
+    bis = bis.reshape(-1, 2)
+    trial_vars = {
+        "dichotomy_u_out": ("trial", bis[:, 0], {"units": "m s^-1", "long_name": "trial u_out"}),
+        "dichotomy_slope": ("trial", bis[:, 1], {"units": "s^-1",
+                                                 "long_name": "trial <domega/dt>"}),
+    }  # fmt: skip
+    if s["status"] != "ok":
+        return _window_point(out, scheme, scene, u_p, pole, None, {}, s["status"], s["reason"],
+                             _cost(t0, c0, 0.0, load_cost, *prior), trial_vars)  # fmt: skip
+    win = SPHWindow.from_dataset(ds, window0)
+    sig = OmegaSignal(**json.loads(ds.attrs["omega_signal"]))
+    win.galilean_shift(float(s["u_out"]) - win.u_out)
+    _, final_time = _dichotomy_times(scene, u_p)
+    steps0 = win.sim.steps
+    values: dict = {}
+    try:
+        values = steady_state(win, scene, pole, final_time, sig)
+        status = str(values["status"])
+        diagnostic = "" if status == "ok" else _residual_text(values)
+        log.info("dichotomy: D = %.2f +- %.2f m/s, P = %.5g Pa, %s", values["D"],
+                 values["D_err"], values["P"], _residual_text(values))  # fmt: skip
+    except (SPHUnstable, SlabError) as exc:
+        status, diagnostic = exc.status, exc.diagnostic
+    cost = _cost(t0, c0, float(win.n_particles * (win.sim.steps - steps0)), load_cost, *prior)
+    return _window_point(out, scheme, scene, u_p, pole, win, values, status, diagnostic, cost,
+                         trial_vars)  # fmt: skip
 
 
 # -- the model's own Hugoniot ---------------------------------------------------------------

@@ -248,7 +248,7 @@ def control_point(
     window0: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike, scheme: str
 ) -> Path:
     """An AMW or MW point: control until steady, then average the steady state (a CSPH
-    scene: ``pipeline_sph.control_point``, AMW only)."""
+    scene: ``pipeline_sph.control_point``)."""
     if scene.get("solver") == "csph":
         from . import pipeline_sph
 
@@ -292,21 +292,18 @@ def _residual_text(values: dict) -> str:
     )
 
 
-def _dich_params(scene: dict) -> dich.DichotomyParams:
-    d = scene["window"]["dichotomy"]
-    return dich.DichotomyParams(
-        half_width=d["half_width"], growth=d["growth"], max_expansions=d["max_expansions"],
-        max_iterations=d["max_iterations"], tolerance=d["tolerance"], z=scene["window"]["z"],
-    )  # fmt: skip
-
-
 def dichotomy_state(
     window0: str | os.PathLike, scene: dict, k: int, previous: str | None, trials: list[str],
     out: str | os.PathLike,
 ) -> Path:  # fmt: skip
     """Iteration k of the dichotomy's loop state (``window.dichotomy``): k = 0 proposes the
-    bracket; k ≥ 1 folds in the trials run on iteration k − 1's proposals."""
-    p = _dich_params(scene)
+    bracket; k ≥ 1 folds in the trials run on iteration k − 1's proposals (a CSPH scene:
+    ``pipeline_sph.dichotomy_state``)."""
+    if scene.get("solver") == "csph":
+        from . import pipeline_sph
+
+        return pipeline_sph.dichotomy_state(window0, scene, k, previous, trials, out)
+    p = dich.params_from_config(scene["window"])
     if k == 0:
         with xr.open_dataset(window0, engine="netcdf4") as ds:
             status = ds.attrs.get("status", "ok")
@@ -326,7 +323,11 @@ def dichotomy_trial(
     window0: str | os.PathLike, scene: dict, state: str, index: int, out: str | os.PathLike
 ) -> Path:
     """One trial: from the window checkpoint at u_out = state.pending[index] (u_p held),
-    run ``dichotomy.trial_time`` and fit ⟨dω/dt⟩."""
+    run ``dichotomy.trial_time`` and fit ⟨dω/dt⟩ (a CSPH scene: ``pipeline_sph``)."""
+    if scene.get("solver") == "csph":
+        from . import pipeline_sph
+
+        return pipeline_sph.dichotomy_trial(window0, scene, state, index, out)
     t0, c0 = time.perf_counter(), _cpu()
     u_out = float(json.loads(Path(state).read_text())["pending"][index])
     win, sig, _, _ = _open(window0)
@@ -349,7 +350,12 @@ def dichotomy_point(
     window0: str | os.PathLike, scene: dict, u_p: float, state: str, trials: list[str],
     out: str | os.PathLike,
 ) -> Path:  # fmt: skip
-    """The final refinement: at the root u_out of the bisection, a longer steady average."""
+    """The final refinement: at the root u_out of the bisection, a longer steady average (a
+    CSPH scene: ``pipeline_sph.dichotomy_point``)."""
+    if scene.get("solver") == "csph":
+        from . import pipeline_sph
+
+        return pipeline_sph.dichotomy_point(window0, scene, u_p, state, trials, out)
     t0, c0 = time.perf_counter(), _cpu()
     s = json.loads(Path(state).read_text())
     scheme = "dichotomy"

@@ -85,7 +85,10 @@ def test_copper_config_is_valid_and_filled() -> None:
     eos = solid["material"]["eos"]
     assert (eos["rho0"], eos["c0"], eos["s"], eos["gamma0"]) == (8930.0, 3940.0, 1.49, 2.0)
     assert solid["shock"]["bin_width"] == pytest.approx(2e-5)  # 2 dx, filled from sample.dx
-    assert solid["window"]["length"] == pytest.approx(1.5e-3)  # 150 dx
+    assert solid["window"]["length"] == pytest.approx(2e-3)  # 200 dx (set)
+    assert solid["window"]["cut_every"] == pytest.approx(1e-4)  # 10 dx, filled
+    assert solid["schemes"] == ["piston", "amw", "mw", "dichotomy"]
+    assert solid["window"]["dichotomy"]["half_width"] == 100.0  # m/s, schema default
     assert porous["material"]["strength"]["model"] == "von_mises"
     assert porous["numerics"]["dev_mean"] is True
     assert load_config(ROOT / "tests/workflow/tiny_cu/config.yaml")["scenes"]["tiny_cu"]
@@ -124,12 +127,51 @@ def test_copper_config_is_valid_and_filled() -> None:
         (
             "cu_porous",
             lambda s: s.update(schemes=["piston", "amw"]),
-            "scenes.cu_porous.schemes = ['piston', 'amw']: amw needs dim = 1",
+            "scenes.cu_porous.schemes = ['piston', 'amw']: ['amw'] not available for a "
+            "solver = csph scene with dim = 2 (scenes.cu_porous) (the CSPH window is 1D); "
+            "allowed: ['piston']",
+        ),
+        (
+            "cu_porous",
+            lambda s: s.update(schemes=["piston", "mw", "dichotomy"]),
+            "scenes.cu_porous.schemes = ['piston', 'mw', 'dichotomy']: ['mw', 'dichotomy'] "
+            "not available for a solver = csph scene with dim = 2",
         ),
         (
             "cu_solid",
-            lambda s: s.update(schemes=["piston", "mw"]),
-            "scenes.cu_solid.schemes[1] = 'mw': allowed values ['piston', 'amw']",
+            lambda s: s.update(schemes=["piston", "amx"]),
+            "scenes.cu_solid.schemes[1] = 'amx': allowed values ['piston', 'amw', 'mw', "
+            "'dichotomy']",
+        ),
+        (
+            "cu_solid",
+            lambda s: s["window"].update(dichotomy={"half_width": 20.0, "tolerance": 50.0}),
+            "scenes.cu_solid.window.dichotomy.tolerance = 50: must be below the initial "
+            "bracket width 2 window.dichotomy.half_width = 40 m/s; allowed range (0, 40) m/s",
+        ),
+        (
+            "cu_solid",
+            lambda s: s["window"].update(dichotomy={"half_width": 0.0}),
+            "scenes.cu_solid.window.dichotomy.half_width = 0.0: out of range; allowed range "
+            "(0.0, 5000.0]",
+        ),
+        (
+            "cu_solid",
+            lambda s: s["window"].update(mw={"gain_rate": -0.1}),
+            "scenes.cu_solid.window.mw.gain_rate = -0.1: out of range; allowed range [0.0, 10.0]",
+        ),
+        (
+            "cu_solid",
+            lambda s: s["window"].update(dichotomy={"trial_time": 2.0}),
+            "scenes.cu_solid.window.dichotomy.trial_time = 2.0: out of range; allowed range "
+            "(0.0, 1.0]",
+        ),
+        (  # the slab behind the front (2 gap + avg_length = 0.8 mm) must fit behind it
+            "cu_solid",
+            lambda s: s["window"].update(front_fraction=0.35),
+            "scenes.cu_solid.window.front_fraction = 0.35: the front starts 0.0007 m from the "
+            "outflow edge of window.length = 0.002 m, less than the averaged slab behind it "
+            "needs, 2 shock.gap + shock.avg_length = 0.0008 m; allowed range [0.4, 0.8]",
         ),
         (
             "cu_solid",
@@ -156,16 +198,22 @@ def test_bad_csph_values_name_key_and_range(scene: str, edit, expect: str) -> No
     assert expect in str(ei.value)
 
 
-def test_csph_scene_refuses_inherited_md_schemes() -> None:
+def test_csph_scene_refuses_inherited_window_schemes_in_2d() -> None:
+    """A 1D scene inherits every scheme; a 2D one only the piston (the window is 1D)."""
     cfg = copper()
     cfg["schemes"] = ["piston", "dichotomy"]
     del cfg["scenes"]["cu_solid"]["schemes"]
+    validate_config(copy.deepcopy(cfg))
+    del cfg["scenes"]["cu_porous"]["schemes"]
     with pytest.raises(ConfigError) as ei:
         validate_config(cfg)
+    msg = str(ei.value)
     assert (
-        "schemes = ['piston', 'dichotomy']: a solver = csph scene (scenes.cu_solid) runs only"
-        in (str(ei.value))
+        "  schemes = ['piston', 'dichotomy']: ['dichotomy'] not available for a solver = csph "
+        "scene with dim = 2 (scenes.cu_porous) (the CSPH window is 1D); allowed: ['piston']; "
+        "give the scene its own schemes" in msg
     )
+    assert "cu_solid" not in msg
 
 
 def test_md_scene_without_solver_is_still_md() -> None:

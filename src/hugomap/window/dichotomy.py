@@ -49,6 +49,16 @@ class DichotomyParams:
     z: float = 2.0
 
 
+def params_from_config(window: dict) -> DichotomyParams:
+    """The loop's parameters from a scene's validated ``window`` config (its ``dichotomy``
+    block and ``z``), in the solver's velocity units (σ/τ for MD, m/s for CSPH)."""
+    d = window["dichotomy"]
+    return DichotomyParams(
+        half_width=d["half_width"], growth=d["growth"], max_expansions=d["max_expansions"],
+        max_iterations=d["max_iterations"], tolerance=d["tolerance"], z=window["z"],
+    )  # fmt: skip
+
+
 def initial_state(u_out0: float, p: DichotomyParams) -> dict:
     """Iteration 0: the two bracket runs, to be run in parallel."""
     return {
