@@ -1,9 +1,9 @@
 """Workflow stages of CSPH scenes (``solver: csph``): file in, file out, SI units throughout
 (m, s, kg, Pa, J/kg; 1D per unit cross-section, 2D plane strain per metre of depth).
 
-prepare_sample → load_to_target_stage (checkpoint) → piston_point, and for 1D scenes
+prepare_sample → load_to_target_stage (checkpoint) → piston_point, and
 window_start → control_point (AMW and MW: ``window.methods.amw``/``mw`` unchanged, on
-``SPHWindow``) and window_start → dichotomy_state ⇄ dichotomy_trial → dichotomy_point (the loop
+``SPHWindow`` in 1D, ``SPHWindow2D`` in 2D) and (1D) window_start → dichotomy_state ⇄ dichotomy_trial → dichotomy_point (the loop
 of ``window.dichotomy``, trials by ``window.methods.fixed_run``); reference_stage gives the
 model's own Hugoniot. ``pipeline`` and ``pipeline_window`` dispatch here on the scene's
 ``solver``. Point files have the MD layout (``io.dataset.point_dataset``) with SI units.
@@ -52,10 +52,10 @@ from .eos import EOS
 from .io.atomic import write_json, write_netcdf
 from .io.dataset import point_dataset, scalar_vars, solver_tables
 from .sph import checkpoint as ckpt
-from .sph.sample import Sample, SampleError, lattice_1d, lattice_2d, porous_2d
+from .sph.sample import Sample, SampleError, lattice_1d, lattice_2d, porous_2d, porous_tile_2d
 from .sph.simulation import CSPHSimulation, SPHUnstable, profile_fields
 from .sph.state import SPHState
-from .sph.window import SPHWindow
+from .sph.window import InflowTile, SPHWindow, SPHWindow2D, window_from_dataset
 from .strength import Strength
 from .window import dichotomy as dich
 from .window.methods import OmegaSignal, amw, fixed_run, mw
@@ -494,10 +494,14 @@ def _window_times(scene: dict, u_p: float) -> tuple[float, float]:
 def window_start(
     loaded: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike
 ) -> Path:
-    """Cut the 1D window (``SPHWindow.from_piston``) out of the loading checkpoint in the
-    frame of the loading stage's front speed (line fit over its second half), settle it for
-    ``window.settle_time`` and save it with the ω normalisation: ω from the particle count,
-    q_up = L ρ0/m, q_sh = L ρ_sh/m with ρ_sh the slab behind the front at the end of loading."""
+    """Cut the window (1D: ``SPHWindow.from_piston``; 2D: ``SPHWindow2D.from_piston``, see
+    ``_inflow_tile``) out of the loading checkpoint in the frame of the loading stage's front
+    speed (line fit over its second half), settle it for ``window.settle_time`` and save it
+    with the ω normalisation: ω from the particle count, q_up = L A ρ0/m, q_sh = L A ρ_sh/m
+    (A = 1 m² in 1D, the periodic width W in 2D; m the inflow particle's mass) with ρ_sh the
+    slab behind the front at the end of loading (2D: mean density over the width, pores
+    counted) and ρ0 the upstream density (2D: the inflow tile's mean density, which is also
+    the window point's pole: it is the material the window feeds)."""
     fill_csph_defaults(scene)
     attrs = {"stage": "window", "u_p": u_p, "scene_config": json.dumps(scene)}
     with xr.open_dataset(loaded, engine="netcdf4") as ds:
@@ -515,29 +519,79 @@ def window_start(
     pole = _pole_from(ds)
     info = _sample_info(ds)
     xf = float(front[-1])
+    depth = info["y_hi"] - info["y_lo"] if sim.state.dim == 2 else None
     sums = sim.profile_sums(sh["bin_width"], x0=info["x_lo"])
     shocked = slab_state(sums, info["x_lo"], sh["bin_width"],
                          max(float(sim.walls[0]) + sh["gap"], xf - sh["gap"] - sh["avg_length"]),
-                         xf - sh["gap"])  # fmt: skip
+                         xf - sh["gap"], depth)  # fmt: skip
     if shocked is None:
         return _failure(out, "no_front_speed", "no shocked slab behind the front", attrs)
+    t0, c0 = time.perf_counter(), _cpu()
+    extra: dict = {}
     try:
-        win = SPHWindow.from_piston(
-            sim, xf, u_p, float(a), w["length"], w["front_fraction"], w["cut_every"],
-            w["sync_steps"], rho0=pole["rho0"], e0=pole.get("E0", 0.0),
-        )  # fmt: skip
+        if sim.state.dim == 1:
+            win = SPHWindow.from_piston(
+                sim, xf, u_p, float(a), w["length"], w["front_fraction"], w["cut_every"],
+                w["sync_steps"], rho0=pole["rho0"], e0=pole.get("E0", 0.0),
+            )  # fmt: skip
+        else:
+            tile, extra = _inflow_tile(scene, info)
+            win = SPHWindow2D.from_piston(
+                sim, xf, u_p, float(a), w["length"], w["front_fraction"], tile, w["cut_every"],
+                w["sync_steps"], x_origin=info["x_lo"], e0=pole.get("E0", 0.0),
+            )  # fmt: skip
+            # the window's pole: the inflow material at rest (the sample's is kept beside it)
+            extra["sample_rho0"] = pole["rho0"]
+            pole = {**pole, "rho0": win.rho0, "rho0_err": 0.0}
         if w["settle_time"] > 0:
-            win.sim.run_until(win.time + w["settle_time"])
-    except ValueError as exc:
+            # through the window's own steps: its inflow and outflow are updated meanwhile
+            steps0, t_end = win.sim.steps, win.time + w["settle_time"]
+            while win.time < t_end:
+                win.advance(w["sync_steps"])
+            log.info("settled %.3g s in %d steps", w["settle_time"], win.sim.steps - steps0)
+    except (ValueError, SampleError) as exc:
         return _failure(out, "no_inflow", str(exc), attrs)
     except SPHUnstable as exc:
         return _failure(out, exc.status, exc.diagnostic, attrs)
     L = win.geom.length
-    sig = {"kind": "N", "q_up": L * pole["rho0"] / win.m0, "q_sh": L * shocked["rho"] / win.m0,
-           "bin_width": sh["bin_width"]}  # fmt: skip
+    sig = {"kind": "N", "q_up": L * win.area * win.rho0 / win.m0,
+           "q_sh": L * win.area * shocked["rho"] / win.m0, "bin_width": sh["bin_width"]}  # fmt: skip
+    cost = _cost(t0, c0, 0.0, json.loads(ds.attrs.get("cost", "{}")))
     return win.save(out, attrs={**attrs, "status": "ok", "D_guess": float(a),
                                 "omega_signal": json.dumps(sig), "pole": json.dumps(pole),
-                                "cost": ds.attrs.get("cost", "{}")})  # fmt: skip
+                                "cost": json.dumps(cost), "inflow": json.dumps(extra)})  # fmt: skip
+
+
+def _inflow_tile(scene: dict, info: dict) -> tuple[InflowTile, dict]:
+    """The 2D window's inflow tile: ``window.tile_length`` (default (1 − front_fraction) L,
+    the part of the window ahead of the front, so that the particle count of the upstream
+    part changes little as the tile slides through) by the sample's periodic width, same dx.
+    Porous scenes: ``sph.sample.porous_tile_2d`` (pores wrapping round x and y), seed
+    ``sample.porous.seed + 1``, distention = the sample's measured one over its porous core
+    within ``sample.porous.tolerance`` (relative: tile and sample differ by at most that);
+    full-density scenes: the square lattice. Returns the tile and what to record of it."""
+    smp, w = scene["sample"], scene["window"]
+    dx, rho_s = smp["dx"], scene["material"]["eos"]["rho0"]
+    lt = w.get("tile_length") or (1.0 - w["front_fraction"]) * w["length"]
+    width = info["y_hi"] - info["y_lo"]
+    por = smp.get("porous")
+    if por is None:
+        tile = lattice_2d(lt, width, dx, rho_s)
+    else:
+        tile = porous_tile_2d(
+            lt, width, dx, rho_s, pore_radius=tuple(por["pore_radius"]),
+            distention=info["distention_core"], seed=por["seed"] + 1, tolerance=por["tolerance"],
+        )  # fmt: skip
+    if abs(tile.y_hi - tile.y_lo - width) > 1e-9 * width:
+        raise SampleError(f"the inflow tile's width {tile.y_hi - tile.y_lo:.6g} m differs from "
+                          f"the sample's {width:.6g} m")  # fmt: skip
+    rec = {"tile_length": tile.x_hi - tile.x_lo, "tile_distention": tile.distention,
+           "tile_n_pores": int(tile.pore_radii.size), "tile_n_particles": tile.n,
+           "sample_distention_core": info.get("distention_core", 1.0)}  # fmt: skip
+    log.info("inflow tile: %.4g x %.4g m, %d particles, %d pores, alpha %.5f (sample core %.5f)",
+             rec["tile_length"], width, tile.n, rec["tile_n_pores"], tile.distention,
+             rec["sample_distention_core"])  # fmt: skip
+    return InflowTile.from_sample(tile), rec
 
 
 def _control_vars(c) -> dict:
@@ -573,10 +627,14 @@ def steady_state(win: SPHWindow, scene: dict, pole: dict, duration: float, signa
     D_front; u_p_set = u_out − u_in. A particle count that never changes over the average
     (the front moved less than one particle's worth) gets the error of that quantum instead
     of the fit's 0. A sample's slab behind the front counts when it spans
-    at least avg_length/2 clear of x_lo + gap; fewer than half the samples with one raise
-    ``SlabError`` (status too_few_samples: the front sat too close to the outflow edge)."""
+    at least avg_length/2 clear of x_lo + window.outflow_gap (default shock.gap); fewer than
+    half the samples with one raise ``SlabError`` (status too_few_samples: the front sat too
+    close to the outflow edge). 2D: slabs are means over the periodic width (``slab_state``
+    with ``depth`` = W: ρ = Σm/(n_bins·width·W), the pores counted)."""
     sh, w = scene["shock"], scene["window"]
     bw, gap, avg = sh["bin_width"], sh["gap"], sh["avg_length"]
+    gap_out = w.get("outflow_gap", gap)
+    depth = getattr(win, "depth", None)  # 2D: the periodic width (pores count in ρ)
     g = win.geom
     n = max(16, int(round(duration / (w["sample_every"] * max(win.dt, 1e-30)))))
     t, om, fr, slabs = [], [], [], []
@@ -588,10 +646,10 @@ def steady_state(win: SPHWindow, scene: dict, pole: dict, duration: float, signa
         xf = front_position(f, g.x_lo, bw, win.u_out, win.u_in)
         t.append(win.time)
         fr.append(xf)
-        a, b = max(g.x_lo + gap, xf - gap - avg), xf - gap
+        a, b = max(g.x_lo + gap_out, xf - gap - avg), xf - gap
         if np.isfinite(xf) and b - a >= 0.5 * avg:
-            beh = slab_state(sums, g.x_lo, bw, a, b)
-            ahd = slab_state(sums, g.x_lo, bw, xf + gap, min(xf + gap + avg, g.x_hi))
+            beh = slab_state(sums, g.x_lo, bw, a, b, depth)
+            ahd = slab_state(sums, g.x_lo, bw, xf + gap, min(xf + gap + avg, g.x_hi), depth)
             if beh is not None:
                 slabs.append((beh, ahd))
     if len(slabs) < max(8, n // 2):
@@ -681,7 +739,7 @@ def control_point(
     if scheme not in ("amw", "mw"):
         return _window_point(out, scheme, scene, u_p, {}, None, {}, "bad_config",
                              f"scheme {scheme} is not a control scheme (amw, mw)", {})  # fmt: skip
-    win = SPHWindow.from_dataset(ds, window0)
+    win = window_from_dataset(ds, window0)
     sig = OmegaSignal(**json.loads(ds.attrs["omega_signal"]))
     pole = json.loads(ds.attrs["pole"])
     w = scene["window"]
@@ -767,7 +825,7 @@ def dichotomy_trial(
         r = {"u_out": u_out, "slope": float("nan"), "status": ds.attrs["status"],
              "diagnostic": ds.attrs.get("diagnostic", "")}  # fmt: skip
         return write_json({**r, **_cost(t0, c0, 0.0)}, out)
-    win = SPHWindow.from_dataset(ds, window0)
+    win = window_from_dataset(ds, window0)
     sig = OmegaSignal(**json.loads(ds.attrs["omega_signal"]))
     trial_time, _ = _dichotomy_times(scene, float(ds.attrs["u_p"]))
     win.galilean_shift(u_out - win.u_out)
@@ -815,7 +873,7 @@ def dichotomy_point(
     if s["status"] != "ok":
         return _window_point(out, scheme, scene, u_p, pole, None, {}, s["status"], s["reason"],
                              _cost(t0, c0, 0.0, load_cost, *prior), trial_vars)  # fmt: skip
-    win = SPHWindow.from_dataset(ds, window0)
+    win = window_from_dataset(ds, window0)
     sig = OmegaSignal(**json.loads(ds.attrs["omega_signal"]))
     win.galilean_shift(float(s["u_out"]) - win.u_out)
     _, final_time = _dichotomy_times(scene, u_p)

@@ -93,6 +93,12 @@ def window_start(
         )  # fmt: skip
     except WindowError as exc:
         return _failure(out, exc.status, exc.diagnostic, attrs)
+    o = w["outflow"]
+    if o["kind"] == "absorbing":
+        # Z = ρ0 D and the averages started at the jump condition's P0 + ρ0 D u_p
+        rho0 = piston_pole["rho0"] if fluid else inflow["rho0"]
+        p0 = piston_pole["P0"] if fluid else inflow["P0"]
+        win.set_absorbing(rho0 * D_guess, o["tau_fast"], o["tau_slow"], p0 + rho0 * D_guess * u_p)
     try:
         # Let the set-up transient (new boundaries, the first seam) pass at the guessed D:
         # every scheme branches from this settled state.

@@ -126,16 +126,36 @@ def test_copper_config_is_valid_and_filled() -> None:
         ),
         (
             "cu_porous",
-            lambda s: s.update(schemes=["piston", "amw"]),
-            "scenes.cu_porous.schemes = ['piston', 'amw']: ['amw'] not available for a "
-            "solver = csph scene with dim = 2 (scenes.cu_porous) (the CSPH window is 1D); "
-            "allowed: ['piston']",
+            lambda s: s.update(schemes=["piston", "mw", "dichotomy"]),
+            "scenes.cu_porous.schemes = ['piston', 'mw', 'dichotomy']: ['dichotomy'] not "
+            "available for a solver = csph scene with dim = 2 (scenes.cu_porous) (the 2D window "
+            "runs AMW and MW: the dichotomy is not measured on it); allowed: ['piston', 'amw', "
+            "'mw']",
+        ),
+        (  # the inflow tile must hold a pore of r_max clear of its own image along x
+            "cu_porous",
+            lambda s: s["window"].update(tile_length=1.0e-4),
+            "scenes.cu_porous.window.tile_length = 0.0001: the periodic inflow tile must hold "
+            "the frozen inflow layer (9 dx) and, if porous, a pore of r_max with a ligament to "
+            "its own image (2 r_max + sample.dx); allowed range [0.00013, 1.0] m",
         ),
         (
+            "cu_solid",
+            lambda s: s["window"].update(tile_length=1.0e-3),
+            "scenes.cu_solid.window.tile_length: only for dim = 2 (this scene has dim = 1)",
+        ),
+        (  # the slab behind the front: shock.gap + window.outflow_gap + shock.avg_length
             "cu_porous",
-            lambda s: s.update(schemes=["piston", "mw", "dichotomy"]),
-            "scenes.cu_porous.schemes = ['piston', 'mw', 'dichotomy']: ['mw', 'dichotomy'] "
-            "not available for a solver = csph scene with dim = 2",
+            lambda s: s["window"].update(outflow_gap=2.0e-4),
+            "scenes.cu_porous.window.front_fraction = 0.48: the front starts 0.000576 m from the "
+            "outflow edge of window.length = 0.0012 m, less than the averaged slab behind it "
+            "needs, shock.gap + window.outflow_gap + shock.avg_length = 0.00065 m",
+        ),
+        (  # the window must fit between piston and front at the end of loading (snowplow D)
+            "cu_porous",
+            lambda s: s["window"].update(length=1.4e-3),
+            "scenes.cu_porous.window.length = 0.0014: a window with window.front_fraction = "
+            "0.48 does not fit around the front at the end of loading",
         ),
         (
             "cu_solid",
@@ -199,7 +219,7 @@ def test_bad_csph_values_name_key_and_range(scene: str, edit, expect: str) -> No
 
 
 def test_csph_scene_refuses_inherited_window_schemes_in_2d() -> None:
-    """A 1D scene inherits every scheme; a 2D one only the piston (the window is 1D)."""
+    """A 1D scene inherits every scheme; a 2D one the piston, AMW and MW only."""
     cfg = copper()
     cfg["schemes"] = ["piston", "dichotomy"]
     del cfg["scenes"]["cu_solid"]["schemes"]
@@ -210,8 +230,9 @@ def test_csph_scene_refuses_inherited_window_schemes_in_2d() -> None:
     msg = str(ei.value)
     assert (
         "  schemes = ['piston', 'dichotomy']: ['dichotomy'] not available for a solver = csph "
-        "scene with dim = 2 (scenes.cu_porous) (the CSPH window is 1D); allowed: ['piston']; "
-        "give the scene its own schemes" in msg
+        "scene with dim = 2 (scenes.cu_porous) (the 2D window runs AMW and MW: the dichotomy "
+        "is not measured on it); allowed: ['piston', 'amw', 'mw']; give the scene its own "
+        "schemes" in msg
     )
     assert "cu_solid" not in msg
 

@@ -29,6 +29,20 @@ moved ``cut_every`` behind ``x_lo``, the layer is cut again: frozen atoms farthe
 ``ghost_width`` behind ``x_lo`` are removed, the mobile atoms behind ``x_lo`` are frozen
 (their thermal velocities dropped), and the face and the wall return to ``x_lo``.
 
+Absorbing outflow (``outflow = "absorbing"``, ``set_absorbing``). The rigid layer reflects
+every wave that reaches it; the shocked region between the front and the outflow then rings,
+and at weak shocks it adjusts only over the transit time of sound running upstream against
+the outflow, ~s u_p (1 − u_p/D) σ/τ in the window frame. The absorbing layer moves at
+    u_face = u_out − (P_fast − P_slow)/Z,
+the velocity a left-running (outgoing) simple wave of pressure jump P_fast − P_slow carries
+(δP = −Z δu), so such a wave leaves without reflection (the characteristic, "non-reflecting"
+boundary condition of hydrocodes). P is the pressure the mobile atoms exert on the boundary:
+the x-force on the layer's atoms plus the wall's impulse rate, over the area, sampled every
+``sync_steps``; P_fast and P_slow are its exponential averages over ``tau_fast`` (noise) and
+``tau_slow`` (the steady level: over longer times the layer moves at u_out on average).
+Z = ρ0 D (the Rayleigh-line impedance (P1 − P0)/u_p) stands for the shocked material's
+ρ1 c1 ≈ ρ0 (D + s u_p); the mismatch reflects (Z1 − Z)/(Z1 + Z), ~10 % at u_p = 1.
+
 Frozen atoms carry negative ids (inflow copy −1 − j, outflow layer ≤ −1 − N_res) and are
 skipped by the kicks, the walls and every observable (``md.integrate``, ``MDSimulation``).
 """
@@ -198,7 +212,60 @@ class MDWindow:
         self.next_id = int(next_id)
         self.area = float(sim.state.L[1] * sim.state.L[2])
         self.n_res = int(self.res_x.shape[0])
+        # the outflow: rigid (the layer moves at u_out) or absorbing (module docstring)
+        self.outflow = "rigid"
+        self.z_out = self.tau_fast = self.tau_slow = 0.0
+        self.p_fast = self.p_slow = float("nan")
+        self.u_face = self.u_out
+        self.impulse_mark = float(sim.state.impulse[0])
         self._set_ref_velocity()
+
+    def set_absorbing(
+        self, impedance: float, tau_fast: float, tau_slow: float, p_start: float
+    ) -> None:
+        """Make the outflow absorbing (module docstring): ``impedance`` Z [m σ⁻² τ⁻¹],
+        averaging times ``tau_fast`` < ``tau_slow`` [τ]; both averages start at ``p_start``
+        [ε σ⁻³] (the jump condition's P0 + ρ0 D u_p: starting them from one noisy sample
+        let the layer leak for tau_slow and the shocked P fell 3 %)."""
+        if not (impedance > 0 and 0 < tau_fast < tau_slow):
+            raise ValueError(
+                f"absorbing outflow needs Z > 0 and 0 < tau_fast < tau_slow, got {impedance}, "
+                f"{tau_fast}, {tau_slow}"
+            )
+        self.outflow = "absorbing"
+        self.z_out, self.tau_fast, self.tau_slow = (
+            float(impedance),
+            float(tau_fast),
+            float(tau_slow),
+        )
+        self.p_fast = self.p_slow = float(p_start)
+        self.impulse_mark = float(self.sim.state.impulse[0])
+
+    def face_pressure(self, interval: float) -> float:
+        """P on the outflow boundary [ε σ⁻³]: −Σ f_x over the layer's atoms plus the wall's
+        impulse since the last call over ``interval`` [τ], per area."""
+        s = self.sim.state
+        layer = s.ids < -self.n_res
+        imp = float(s.impulse[0])
+        p = (-float(np.sum(s.f[layer, 0])) + (imp - self.impulse_mark) / interval) / self.area
+        self.impulse_mark = imp
+        return p
+
+    def _steer_outflow(self, interval: float) -> None:
+        """Absorbing outflow: update P_fast, P_slow and move the layer and its wall at u_face."""
+        p = self.face_pressure(interval)
+        self.p_fast += (p - self.p_fast) * min(1.0, interval / self.tau_fast)
+        self.p_slow += (p - self.p_slow) * min(1.0, interval / self.tau_slow)
+        self._move_layer(self.u_out - (self.p_fast - self.p_slow) / self.z_out)
+
+    def _move_layer(self, u_face: float) -> None:
+        s = self.sim.state
+        layer = s.ids < -self.n_res
+        s.v[layer, 0] = u_face
+        s.v[layer, 1:] = 0.0
+        xl, xr = self.sim.wall_positions()
+        self.sim.place_walls(self.x_face, u_face, xr, s.walls0[3])
+        self.u_face = float(u_face)
 
     def _set_ref_velocity(self) -> None:
         # The material streams at u_in upstream and u_out downstream: discounting their mean
@@ -322,8 +389,10 @@ class MDWindow:
         for _ in range(max(1, math.ceil(n_steps / k))):
             self.sim.advance(k)
             self.x_face_in += self.u_in * k * self.sim.dt
-            self.x_face += self.u_out * k * self.sim.dt
+            self.x_face += self.u_face * k * self.sim.dt
             self._update_boundaries()
+            if self.outflow == "absorbing":
+                self._steer_outflow(k * self.sim.dt)
 
     def _update_boundaries(self) -> None:
         """Release the inflow copy that reached ``x_hi`` and lay the next one behind it; cut
@@ -364,11 +433,11 @@ class MDWindow:
             gone = x[:, 0] < g.x_lo - g.ghost_width
             freeze = behind & ~gone & (ids >= 0)
             ids[freeze] = -1 - self.n_res - ids[freeze]
-            v[behind & ~gone] = [self.u_out, 0.0, 0.0]
+            v[behind & ~gone] = [self.u_face, 0.0, 0.0]
             x, v, ids = x[~gone], v[~gone], ids[~gone]
             self.x_face = g.x_lo
             wall_x = g.x_lo
-            self.sim.place_walls(wall_x, self.u_out, float(s.L[0]), 0.0)
+            self.sim.place_walls(wall_x, self.u_face, float(s.L[0]), 0.0)
         bad = (x[:, 0] < 0) | (x[:, 0] > s.L[0])
         if bad.any():
             raise SolverUnstable(
@@ -383,16 +452,13 @@ class MDWindow:
         self.sim.galilean_shift(du)
         self.u_in += du
         self.u_out += du
+        self.u_face += du
         self._set_ref_velocity()
 
     def set_outflow(self, u_out: float) -> None:
-        """Set the outflow velocity [σ/τ]: the frozen layer and the wall behind it."""
-        s = self.sim.state
-        outflow = s.ids < -self.n_res
-        s.v[outflow, 0] = u_out
-        s.v[outflow, 1:] = 0.0
-        xl, xr = self.sim.wall_positions()
-        self.sim.place_walls(xl, u_out, xr, self.sim.state.walls0[3])
+        """Set the outflow velocity [σ/τ]: the frozen layer and the wall behind it (an absorbing
+        layer keeps its deviation u_face − u_out)."""
+        self._move_layer(self.u_face + (u_out - self.u_out))
         self.u_out = float(u_out)
         self._set_ref_velocity()
 
@@ -430,6 +496,14 @@ class MDWindow:
                     "x_face_in": self.x_face_in,
                     "x_face": self.x_face,
                     "next_id": self.next_id,
+                    "outflow": self.outflow,
+                    "z_out": self.z_out,
+                    "tau_fast": self.tau_fast,
+                    "tau_slow": self.tau_slow,
+                    "p_fast": self.p_fast,
+                    "p_slow": self.p_slow,
+                    "u_face": self.u_face,
+                    "impulse_mark": self.impulse_mark,
                 }
             ),  # fmt: skip
         )
@@ -458,10 +532,16 @@ class MDWindow:
         sim = MDSimulation.from_dataset(ds, source)
         geom = WindowGeometry(**json.loads(ds.attrs["window_geometry"]))
         st = json.loads(ds.attrs["window_state"])
-        return cls(
+        win = cls(
             sim, ds["res_x"].values.copy(), ds["res_v"].values.copy(), geom, st["u_in"],
             st["u_out"], st["x_face_in"], st["x_face"], st["next_id"],
         )  # fmt: skip
+        # the outflow's state (absent from checkpoints written before the absorbing outflow)
+        for key in ("outflow", "z_out", "tau_fast", "tau_slow", "p_fast", "p_slow", "u_face",
+                    "impulse_mark"):  # fmt: skip
+            if key in st:
+                setattr(win, key, st[key] if key == "outflow" else float(st[key]))
+        return win
 
     @classmethod
     def load_path(cls, path: str | os.PathLike) -> MDWindow:

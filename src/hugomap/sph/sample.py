@@ -113,6 +113,7 @@ class Sample:
     seed: int | None = None
     pore_centres: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     pore_radii: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    periodic_x: bool = False
 
     @property
     def n(self) -> int:
@@ -206,8 +207,11 @@ class _Grid:
         j, i = np.nonzero(self.keep)  # particle order: rows in y order, x fastest in a row
         return np.column_stack([self.xoff[j] + i * self.dx, (j + 0.5) * self.dy])
 
-    def disc_sites(self, cx: float, cy: float, r: float, periodic_y: bool) -> tuple:
-        """(rows, cols) of the kept sites strictly inside the disc |p − c| < r."""
+    def disc_sites(
+        self, cx: float, cy: float, r: float, periodic_y: bool, periodic_x: bool = False
+    ) -> tuple:
+        """(rows, cols) of the kept sites strictly inside the disc |p − c| < r (with
+        ``periodic_x`` a disc crossing x = 0 or x = L_x wraps round, as in y)."""
         j0 = math.floor((cy - r) / self.dy - 0.5)
         j1 = math.ceil((cy + r) / self.dy - 0.5)
         jj = np.arange(j0, j1 + 1)
@@ -216,15 +220,21 @@ class _Grid:
         else:
             ok = (jj >= 0) & (jj < self.ny)
             jj, jw = jj[ok], jj[ok]
-        i0 = max(math.floor((cx - r) / self.dx) - 1, 0)
-        i1 = min(math.ceil((cx + r) / self.dx) + 1, self.nx - 1)
-        ii = np.arange(i0, i1 + 1)
+        i0 = math.floor((cx - r) / self.dx) - 1
+        i1 = math.ceil((cx + r) / self.dx) + 1
+        if periodic_x:
+            i1 = min(i1, i0 + self.nx - 1)  # one period at most: no site counted twice
+            ii = np.arange(i0, i1 + 1)
+            iw = np.mod(ii, self.nx)
+        else:
+            ii = np.arange(max(i0, 0), min(i1, self.nx - 1) + 1)
+            iw = ii
         px = self.xoff[jw][:, None] + ii[None, :] * self.dx
         py = ((jj + 0.5) * self.dy)[:, None]
         inside = (px - cx) ** 2 + (py - cy) ** 2 < r * r
-        inside &= self.keep[jw][:, ii]
+        inside &= self.keep[jw][:, iw]
         rows, cols = np.nonzero(inside)
-        return jw[rows], ii[cols]
+        return jw[rows], iw[cols]
 
 
 def _make_sample(
@@ -236,6 +246,7 @@ def _make_sample(
     seed: int | None,
     centres: np.ndarray,
     radii: np.ndarray,
+    periodic_x: bool = False,
 ) -> Sample:
     x = grid.positions()
     n = x.shape[0]
@@ -268,6 +279,7 @@ def _make_sample(
         seed=seed,
         pore_centres=_array(np.asarray(centres, dtype=np.float64).reshape(-1, 2)),
         pore_radii=_array(np.asarray(radii, dtype=np.float64)),
+        periodic_x=periodic_x,
     )
 
 
@@ -302,6 +314,7 @@ def porous_2d(
     region: Literal["core", "box"] = "core",
     kind: Literal["square", "hex"] = "square",
     max_attempts: int = 20000,
+    periodic_x: bool = False,
 ) -> Sample:
     """A 2D plane-strain sample of solid density ``rho_solid`` [kg/m³] with random circular pores
     bringing the measured distention α = ρ_solid/ρ_mean to ``distention`` within ``tolerance``
@@ -313,7 +326,10 @@ def porous_2d(
     with ``periodic_y=False``, between a pore and a y wall). x_margin [m] (default 4·dx): least
     solid between a pore and either x end. region: where α is measured against the target ("core"
     between the solid end layers, or "box"). max_attempts: consecutive rejected RSA positions
-    after which the packer gives up. Method, limits and reasons: see the module doc.
+    after which the packer gives up. periodic_x: pores wrap round x as round y (a tile that
+    repeats along x without a seam, ``porous_tile_2d``; no solid end layers: x_margin must be
+    None or 0 and α is measured over the whole box). Method, limits and reasons: see the
+    module doc.
 
     Raises SampleError (a ValueError) naming the parameter and its allowed range.
     """
@@ -360,6 +376,10 @@ def porous_2d(
     margin = 4.0 * dx if x_margin is None else float(x_margin)
     if not math.isfinite(margin) or margin < 0:
         raise SampleError(f"x_margin = {x_margin!r} must be ≥ 0 (metres)")
+    if periodic_x:
+        if x_margin not in (None, 0, 0.0):
+            raise SampleError(f"x_margin = {x_margin!r} must be None or 0 with periodic_x")
+        margin, region = 0.0, "box"  # a periodic tile has no ends: α over the whole tile
     if region not in ("core", "box"):
         raise SampleError(f"region = {region!r} must be 'core' or 'box'")
     if int(max_attempts) < 1:
@@ -374,7 +394,7 @@ def porous_2d(
         y_span = ly - 2.0 * r_max - gap  # a pore must not touch its own periodic image
     else:
         y_span = ly - 2.0 * (r_max + gap)
-    x_span = x_max - x_min - 2.0 * r_max
+    x_span = lx - 2.0 * r_max - gap if periodic_x else x_max - x_min - 2.0 * r_max
     if x_span < 0 or y_span < 0:
         walls = "" if periodic_y else " + 2·min_gap"
         raise SampleError(
@@ -383,7 +403,7 @@ def porous_2d(
             f"2·r_max + min_gap{walls} ≤ ly = {ly:g} m"
         )
     if alpha == 1.0:
-        return _make_sample(grid, rho_solid, core, periodic_y, alpha, seed, [], [])
+        return _make_sample(grid, rho_solid, core, periodic_y, alpha, seed, [], [], periodic_x)
 
     a_p = grid.area_per_particle
     if region == "core":
@@ -405,14 +425,18 @@ def porous_2d(
         """A uniformly drawn centre where a pore of radius r clears every earlier pore by gap."""
         lo_y = 0.0 if periodic_y else r + gap
         hi_y = ly if periodic_y else ly - r - gap
+        lo_x, hi_x = (0.0, lx) if periodic_x else (x_min + r, x_max - r)
         for _ in range(int(max_attempts)):
-            cx = rng.uniform(x_min + r, x_max - r)
+            cx = rng.uniform(lo_x, hi_x)
             cy = rng.uniform(lo_y, hi_y)
             if r_arr.size:
                 ddy = cy_arr - cy
                 if periodic_y:
                     ddy -= ly * np.round(ddy / ly)
-                d2 = (cx_arr - cx) ** 2 + ddy**2
+                ddx = cx_arr - cx
+                if periodic_x:
+                    ddx -= lx * np.round(ddx / lx)
+                d2 = ddx**2 + ddy**2
                 if np.any(d2 < (r_arr + r + gap) ** 2):
                     continue
             return cx, cy
@@ -420,7 +444,7 @@ def porous_2d(
 
     def place(r: float, cx: float, cy: float) -> int:
         nonlocal cx_arr, cy_arr, r_arr
-        rows, cols = grid.disc_sites(cx, cy, r, periodic_y)
+        rows, cols = grid.disc_sites(cx, cy, r, periodic_y, periodic_x)
         grid.keep[rows, cols] = False
         centres.append((cx, cy))
         radii.append(r)
@@ -460,19 +484,24 @@ def porous_2d(
         if spot is None:
             raise give_up(r_guess)
         cx, cy = spot
-        lo, hi = r_floor, min(r_max, x_max - cx, cx - x_min)
+        lo, hi = r_floor, (r_max if periodic_x else min(r_max, x_max - cx, cx - x_min))
+        if periodic_x:  # nor touch its own image along x
+            hi = min(hi, 0.5 * (lx - gap))
         if not periodic_y:
             hi = min(hi, cy - gap, ly - gap - cy)
         if r_arr.size:  # stay clear of the pores already placed
             ddy = cy_arr - cy
             if periodic_y:
                 ddy -= ly * np.round(ddy / ly)
-            hi = min(hi, float(np.min(np.sqrt((cx_arr - cx) ** 2 + ddy**2) - r_arr - gap)))
+            ddx = cx_arr - cx
+            if periodic_x:
+                ddx -= lx * np.round(ddx / lx)
+            hi = min(hi, float(np.min(np.sqrt(ddx**2 + ddy**2) - r_arr - gap)))
         if hi < lo:
             raise give_up(r_guess)
 
         def count(rad: float, cx: float = cx, cy: float = cy) -> int:
-            return int(grid.disc_sites(cx, cy, rad, periodic_y)[0].size)
+            return int(grid.disc_sites(cx, cy, rad, periodic_y, periodic_x)[0].size)
 
         if count(hi) <= want:
             r = hi
@@ -487,7 +516,15 @@ def porous_2d(
         to_remove_left -= place(r, cx, cy)
 
     sample = _make_sample(
-        grid, rho_solid, core, periodic_y, alpha, seed, np.array(centres), np.array(radii)
+        grid,
+        rho_solid,
+        core,
+        periodic_y,
+        alpha,
+        seed,
+        np.array(centres),
+        np.array(radii),
+        periodic_x,
     )
     got = sample.distention_core if region == "core" else sample.distention
     if abs(got - alpha) > tolerance * alpha:
@@ -498,3 +535,29 @@ def porous_2d(
             "another seed"
         )
     return sample
+
+
+def porous_tile_2d(
+    lx: float,
+    ly: float,
+    dx: float,
+    rho_solid: float,
+    *,
+    pore_radius: float | tuple[float, float],
+    distention: float,
+    seed: int = 0,
+    tolerance: float = 0.005,
+    min_gap: float | None = None,
+    kind: Literal["square", "hex"] = "square",
+) -> Sample:
+    """A porous tile periodic in x and y (``porous_2d`` with ``periodic_x``): pores wrap round
+    both periods, so copies laid end to end along x (or cut at any x and continued from the
+    same x modulo L_x) join without a seam, gap or overlap; the lattice is periodic in x with
+    period L_x = n_x dx. The distention α = ρ_solid/ρ_mean = n_x n_y/N_kept is measured over
+    the whole tile and met within ``tolerance`` (relative). Units and the other arguments as
+    in ``porous_2d``: the moving window's inflow material (``sph.window.SPHWindow2D``)."""
+    return porous_2d(
+        lx, ly, dx, rho_solid, pore_radius=pore_radius, distention=distention, seed=seed,
+        tolerance=tolerance, min_gap=min_gap, x_margin=0.0, periodic_y=True, region="box",
+        kind=kind, periodic_x=True,
+    )  # fmt: skip

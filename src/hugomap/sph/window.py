@@ -17,7 +17,7 @@ import xarray as xr
 from ..io.atomic import write_netcdf
 from ..md.simulation import CheckpointError
 from . import checkpoint as ckpt
-from .simulation import CSPHSimulation, SPHUnstable
+from .simulation import CSPHSimulation, SPHUnstable, _threads_for
 from .state import SPHState
 
 # /2: the simulation inside is an ``sph.checkpoint`` (format hugomap-sph-checkpoint/1)
@@ -266,6 +266,8 @@ class SPHWindow:
         """Rebuild a window saved by ``save``; a foreign or altered file raises
         ``CheckpointError`` naming ``source``."""
         where = str(source if source is not None else ds.encoding.get("source", "(in memory)"))
+        if cls is SPHWindow and ds.attrs.get("window_format") == WINDOW_FORMAT_2D:
+            return SPHWindow2D.from_dataset(ds, source)
         if ds.attrs.get("window_format") != WINDOW_FORMAT:
             raise CheckpointError(
                 where, f"not an SPH window (format {ds.attrs.get('window_format')!r})"
@@ -280,3 +282,314 @@ class SPHWindow:
         with xr.open_dataset(path, engine="netcdf4") as ds:
             ds.load()
         return cls.from_dataset(ds, path)
+
+
+# == the 2D window (plane strain, periodic in y) ===========================================
+
+WINDOW_FORMAT_2D = "hugomap-sph-window2d/1"
+
+
+@dataclass
+class InflowTile:
+    """The inflow material of the 2D window: one period of a tile periodic in x and y (a
+    ``sph.sample.porous_tile_2d`` or a full lattice), laid copy after copy along x.
+
+    x (n, 2) [m]: sites in [0, n_cols·dx) × [y_lo, y_hi), y in the simulation's periodic box;
+    m [kg/m], rho [kg/m³] (every particle at the solid density), l [m] per site; dx [m]: the
+    column width (the lattice spacing); n_cols: columns in one period, so the period is
+    L_t = n_cols·dx; rho_mean [kg/m³]: the tile's mean density ρ_s N a_p/(L_t W), the
+    upstream density the window feeds. Column of a site: ⌊x/dx⌋ (square lattice at (i + ½)dx,
+    hexagonal at (i + ¼)dx or (i + ¾)dx: always inside its column)."""
+
+    x: np.ndarray
+    m: np.ndarray
+    rho: np.ndarray
+    l: np.ndarray
+    dx: float
+    n_cols: int
+    rho_mean: float
+
+    @property
+    def length(self) -> float:
+        return self.n_cols * self.dx
+
+    @classmethod
+    def from_sample(cls, sample) -> InflowTile:
+        """From a ``sph.sample.Sample`` periodic in x and y (a tile)."""
+        # a full lattice is periodic in x by construction; pores must wrap round x too
+        periodic = sample.periodic_y and (sample.periodic_x or sample.pore_radii.size == 0)
+        if sample.dim != 2 or not periodic:
+            raise ValueError("the inflow tile must be a 2D sample periodic in x and y")
+        n_cols = int(round((sample.x_hi - sample.x_lo) / sample.dx))
+        x = np.array(sample.x, dtype=np.float64)
+        x[:, 0] -= sample.x_lo
+        return cls(x, np.array(sample.m, dtype=np.float64), np.array(sample.rho, dtype=np.float64),
+                   np.array(sample.l, dtype=np.float64), float(sample.dx), n_cols,
+                   float(sample.rho_mean))  # fmt: skip
+
+    def columns(self) -> np.ndarray:
+        return np.floor(self.x[:, 0] / self.dx).astype(np.int64)
+
+    def chunk(self, col0: int, k: int, x_start: float) -> np.ndarray:
+        """Indices and window positions of the sites of columns col0 … col0 + k − 1 (modulo
+        n_cols), laid from ``x_start`` [m]: returns (index, x (n, 2))."""
+        if not 0 < k <= self.n_cols:
+            raise ValueError(f"a chunk of {k} columns out of a tile of {self.n_cols}")
+        rel = np.mod(self.columns() - col0, self.n_cols)
+        sel = np.nonzero(rel < k)[0]
+        sel = sel[np.argsort(rel[sel], kind="stable")]
+        pos = self.x[sel].copy()
+        # the site's offset inside its column is kept: the seam between copies is the tile's
+        # own periodic boundary (no gap, no overlap)
+        pos[:, 0] = x_start + rel[sel] * self.dx + (self.x[sel, 0] - self.columns()[sel] * self.dx)
+        return sel, pos
+
+
+class SPHWindow2D(SPHWindow):
+    """The moving window around a 2D plane-strain ``CSPHSimulation`` periodic in y (the
+    protocol of ``SPHWindow``; ``area`` = the periodic width W [m], per metre of depth).
+
+    Inflow: beyond x_hi, frozen particles of an ``InflowTile`` move rigidly at u_in < 0 (x and
+    y both held: only x moves, at u_in); one that crosses x_hi is released. The frozen layer is
+    kept between (n_inflow/2 + 1)·dx and n_inflow·dx + dx deep by laying the tile's next
+    columns behind it: the tile is periodic in x, so the inflow is the tile repeated without a
+    seam whatever the chunk size (the cursor ``tile_col`` remembers where the tile was cut).
+    ``x_next`` [m] is where the next column starts, moving with the frozen particles at u_in
+    (kept as its value at ``t_ref`` [s]). Outflow: the left wall (a piston at u_out with
+    mirror ghosts); when it has receded ``cut_every`` behind x_lo, the mobile particles
+    behind x_lo are removed and the wall is put halfway between the last removed and the first
+    kept particle along x (as in 1D; in compacted, disordered material that is about x_lo,
+    where the kept particles' volume begins on average).
+    Upstream state: the tile at rest in the lab frame (mean density ``rho0`` = ρ_s/α_tile,
+    unstressed, e0); the frozen particles are held at the solid density, e0, S = 0.
+    """
+
+    def __init__(
+        self,
+        sim: CSPHSimulation,
+        geom: SPHWindowGeometry,
+        u_in: float,
+        u_out: float,
+        tile: InflowTile,
+        e0: float,
+        tile_col: int,
+        x_next: float,
+        t_ref: float,
+    ):
+        if sim.state.dim != 2 or not sim.periodic[1]:
+            raise ValueError("SPHWindow2D runs 2D simulations periodic in y")
+        self.sim = sim
+        self.geom = geom
+        self.u_in = float(u_in)
+        self.u_out = float(u_out)
+        self.tile = tile
+        self.rho0 = float(tile.rho_mean)
+        self.e0 = float(e0)
+        self.m0 = float(np.median(tile.m))
+        self.area = float(sim.length[1])
+        self.depth = self.area  # slab states divide by n_bins·width·W (pores count)
+        self.tile_col = int(tile_col)
+        self.x_next = float(x_next)
+        self.t_ref = float(t_ref)
+        self.n_updates = 0
+        #: mass released across x_hi and removed behind x_lo since the cut [kg/m]
+        self.mass_in = 0.0
+        self.mass_out = 0.0
+
+    @classmethod
+    def from_piston(  # type: ignore[override]
+        cls,
+        sim: CSPHSimulation,
+        x_front: float,
+        u_p: float,
+        D_guess: float,
+        length: float,
+        front_fraction: float,
+        tile: InflowTile,
+        cut_every: float | None = None,
+        sync_steps: int = 10,
+        n_inflow: int = 8,
+        x_origin: float = 0.0,
+        e0: float = 0.0,
+    ) -> SPHWindow2D:
+        """Cut a window out of a 2D piston run (lab frame, upstream at rest) with the front at
+        about ``front_fraction`` of ``length`` from x_lo, in the frame moving at D_guess
+        [m/s]. x_hi is put on a lattice line of the sample (x_origin + k·dx, dx = the tile's)
+        so that the sample's columns below it and the first tile column above it join without
+        a gap; the sample's particles beyond x_hi are dropped and the tile is laid from x_hi
+        (column 0 first), frozen. Lengths in m."""
+        st = sim.state
+        if st.dim != 2:
+            raise ValueError("SPHWindow2D.from_piston needs a 2D piston run")
+        dx = tile.dx
+        hi = x_origin + round((x_front + (1.0 - front_fraction) * length - x_origin) / dx) * dx
+        lo = hi - length
+        xs = st.x[:, 0]
+        if lo <= float(sim.walls[0]) + dx or hi > float(xs.max()):
+            raise ValueError(
+                f"a window [{lo:.4g}, {hi:.4g}] m does not fit in the sample between the "
+                f"piston at {sim.walls[0]:.4g} m and its far end at {xs.max():.4g} m: shorten "
+                "it, move window.front_fraction or load further"
+            )
+        keep = np.nonzero(xs >= lo)[0]
+        keep = keep[xs[keep] < hi]
+        behind = xs < lo
+        wall = 0.5 * (float(xs[behind].max()) + float(xs[keep].min())) if behind.any() else lo
+        du = -D_guess
+        u_in, u_out = du, u_p + du
+        k = n_inflow + 1
+        sel, pos = tile.chunk(0, k, hi)
+        n_t = sel.size
+        arrays = {
+            "x": np.concatenate([st.x[keep], pos]) - np.array([lo, 0.0]),
+            "v": np.concatenate([st.v[keep] + np.array([du, 0.0]),
+                                 np.tile([u_in, 0.0], (n_t, 1))]),
+            "m": np.concatenate([st.m[keep], tile.m[sel]]),
+            "rho": np.concatenate([st.rho[keep], tile.rho[sel]]),
+            "e": np.concatenate([st.e[keep], np.full(n_t, e0)]),
+            "S": np.concatenate([st.S[keep], np.zeros((n_t, 4))]),
+            "eps_p": np.concatenate([st.eps_p[keep], np.zeros(n_t)]),
+            "l": np.concatenate([st.l[keep], tile.l[sel]]),
+        }  # fmt: skip
+        new = SPHState(**arrays, time=st.time)
+        frozen = np.zeros(new.n, dtype=bool)
+        frozen[keep.size :] = True
+        w = CSPHSimulation(
+            new, sim.eos, sim.strength, theta=sim.theta, cfl=sim.cfl, k_comp=sim.k_comp,
+            walls=(wall - lo, u_out, None, 0.0), periodic=(False, True),
+            lo=(0.0, float(sim.lo[1])), length=(1.0, float(sim.length[1])),
+            grad_correction=sim.grad_correction, dev_mean=sim.dev_mean, skin=sim.skin,
+            dt_floor=sim.dt_floor, escape_distance=sim.escape,
+        )  # fmt: skip
+        w.dt = sim.dt
+        w.frozen = frozen
+        w.frozen_velocity = u_in
+        w.frozen_state = (float(np.median(tile.rho)), float(e0), float(np.median(tile.l)))
+        cut = float(cut_every) if cut_every is not None else 10.0 * dx
+        geom = SPHWindowGeometry(0.0, hi - lo, cut, int(sync_steps), float(dx), int(n_inflow))
+        return cls(w, geom, u_in, u_out, tile, e0, k % tile.n_cols, length + k * dx, st.time)
+
+    # -- protocol ----------------------------------------------------------------------------
+    def advance(self, n_steps: int) -> None:
+        """Advance ``n_steps`` (rounded up to whole boundary updates of ``sync_steps``); the
+        frozen particles' y is put back after every step (the solver moves only their x)."""
+        k = self.geom.sync_steps
+        sim = self.sim
+        with _threads_for(sim.state.n):
+            for _ in range(max(1, math.ceil(n_steps / k))):
+                for _ in range(k):
+                    f = sim.frozen
+                    y = sim.state.x[f, 1].copy()
+                    sim.step()
+                    sim.state.x[f, 1] = y
+                self._update_boundaries()
+
+    def _sync_inflow(self) -> None:
+        """Bring ``x_next`` to the current time (it moves with the frozen particles)."""
+        t = self.sim.time
+        self.x_next += self.sim.frozen_velocity * (t - self.t_ref)
+        self.t_ref = t
+
+    def _update_boundaries(self) -> None:
+        g = self.geom
+        sim = self.sim
+        st = sim.state
+        if not self.u_in < 0:
+            raise SPHUnstable("no_inflow", f"u_in = {self.u_in:.4g} m/s must be < 0")
+        if sim.walls[0] > g.x_lo + g.cut_every:
+            raise SPHUnstable(
+                "outflow_reversed",
+                f"the outflow face moved {sim.walls[0] - g.x_lo:.3g} m into the window "
+                f"(u_out = {self.u_out:.4g} m/s > 0 for too long)",
+            )
+        self._sync_inflow()
+        xs = st.x[:, 0]
+        frozen = sim.frozen & (xs >= g.x_hi)  # release what crossed x_hi
+        self.mass_in += float(np.sum(st.m[sim.frozen & ~frozen]))
+        depth = self.x_next - g.x_hi
+        add = 0
+        if depth < (g.n_inflow // 2 + 1) * g.dx0:
+            add = int(min(math.ceil(((g.n_inflow + 1) * g.dx0 - depth) / g.dx0), self.tile.n_cols))
+        cut = sim.walls[0] < g.x_lo - g.cut_every
+        if not (add or cut):
+            sim.frozen = frozen
+            return
+        keep = np.ones(st.n, dtype=bool)
+        wall = float(sim.walls[0])
+        if cut:
+            behind = (xs < g.x_lo) & ~frozen
+            keep = ~behind
+            self.mass_out += float(np.sum(st.m[behind]))
+            if behind.any() and keep.any():
+                wall = 0.5 * (float(xs[behind].max()) + float(xs[keep].min()))
+        arrays = {k: getattr(st, k)[keep] for k in ("x", "v", "m", "rho", "e", "S", "eps_p", "l")}
+        frozen = frozen[keep]
+        if add:
+            sel, pos = self.tile.chunk(self.tile_col, add, self.x_next)
+            n = sel.size
+            arrays["x"] = np.concatenate([arrays["x"], pos])
+            arrays["v"] = np.concatenate([arrays["v"], np.tile([self.u_in, 0.0], (n, 1))])
+            arrays["m"] = np.concatenate([arrays["m"], self.tile.m[sel]])
+            arrays["rho"] = np.concatenate([arrays["rho"], self.tile.rho[sel]])
+            arrays["e"] = np.concatenate([arrays["e"], np.full(n, self.e0)])
+            arrays["S"] = np.concatenate([arrays["S"], np.zeros((n, 4))])
+            arrays["eps_p"] = np.concatenate([arrays["eps_p"], np.zeros(n)])
+            arrays["l"] = np.concatenate([arrays["l"], self.tile.l[sel]])
+            frozen = np.concatenate([frozen, np.ones(n, dtype=bool)])
+            self.x_next += add * g.dx0
+            self.tile_col = (self.tile_col + add) % self.tile.n_cols
+        sim.walls[0] = wall
+        sim.replace_particles(SPHState(**arrays, time=st.time), frozen)
+        self.n_updates += 1
+
+    def galilean_shift(self, du: float) -> None:
+        """Add ``du`` [m/s] to every x velocity (mobile and frozen), u_in, u_out and the wall;
+        the inflow cursor is brought up to date first (it moves at the old u_in until now)."""
+        self._sync_inflow()
+        super().galilean_shift(du)
+
+    # -- checkpoints -------------------------------------------------------------------------
+    def to_dataset(self, attrs: dict | None = None) -> xr.Dataset:
+        """The simulation's checkpoint with the tile (arrays ``tile_*``, checksummed with it)
+        and the window's geometry and boundary state (inflow cursor) as attributes."""
+        t = self.tile
+        window = {"u_in": self.u_in, "u_out": self.u_out, "e0": self.e0,
+                  "tile_col": self.tile_col, "x_next": self.x_next, "t_ref": self.t_ref,
+                  "mass_in": self.mass_in, "mass_out": self.mass_out,
+                  "tile_dx": t.dx, "tile_cols": t.n_cols,
+                  "tile_rho_mean": t.rho_mean}  # fmt: skip
+        extra = xr.Dataset({
+            "tile_x": (("tile", "tile_dim"), t.x), "tile_m": ("tile", t.m),
+            "tile_rho": ("tile", t.rho), "tile_l": ("tile", t.l),
+        })  # fmt: skip
+        return ckpt.to_dataset(
+            self.sim, extra=extra,
+            attrs={**(attrs or {}), "window_format": WINDOW_FORMAT_2D,
+                   "geometry": json.dumps(asdict(self.geom)), "window": json.dumps(window)},
+        )  # fmt: skip
+
+    @classmethod
+    def from_dataset(cls, ds: xr.Dataset, source: str | os.PathLike | None = None) -> SPHWindow2D:
+        where = str(source if source is not None else ds.encoding.get("source", "(in memory)"))
+        if ds.attrs.get("window_format") != WINDOW_FORMAT_2D:
+            raise CheckpointError(
+                where, f"not a 2D SPH window (format {ds.attrs.get('window_format')!r})"
+            )
+        sim = ckpt.from_dataset(ds, where)
+        geom = SPHWindowGeometry(**json.loads(ds.attrs["geometry"]))
+        w = json.loads(ds.attrs["window"])
+        tile = InflowTile(
+            np.array(ds["tile_x"].values, dtype=np.float64), np.array(ds["tile_m"].values),
+            np.array(ds["tile_rho"].values), np.array(ds["tile_l"].values), float(w["tile_dx"]),
+            int(w["tile_cols"]), float(w["tile_rho_mean"]),
+        )  # fmt: skip
+        win = cls(sim, geom, w["u_in"], w["u_out"], tile, w["e0"], w["tile_col"], w["x_next"],
+                  w["t_ref"])  # fmt: skip
+        win.mass_in, win.mass_out = float(w["mass_in"]), float(w["mass_out"])
+        return win
+
+
+def window_from_dataset(ds: xr.Dataset, source: str | os.PathLike | None = None) -> SPHWindow:
+    """The 1D or 2D window saved in ``ds`` (by its ``window_format``; ``SPHWindow.from_dataset``
+    dispatches the same way)."""
+    return SPHWindow.from_dataset(ds, source)
