@@ -274,9 +274,8 @@ RSA_JAMMING = 0.547
 MIN_COLUMNS = 40
 #: Frozen inflow particles of the 1D window (``sph.window.SPHWindow.from_piston``).
 WINDOW_INFLOW = 8
-#: Schemes a CSPH scene runs, by dim (the windows: ``sph.window.SPHWindow``, ``SPHWindow2D``;
-#: the dichotomy is not yet measured on the 2D window).
-CSPH_SCHEMES = {1: ("piston", "amw", "mw", "dichotomy"), 2: ("piston", "amw", "mw")}
+#: Schemes a CSPH scene runs, by dim (the windows: ``sph.window.SPHWindow``, ``SPHWindow2D``).
+CSPH_SCHEMES = {1: ("piston", "amw", "mw", "dichotomy"), 2: ("piston", "amw", "mw", "dichotomy")}
 
 
 def fill_csph_defaults(sc: dict) -> None:
@@ -304,12 +303,10 @@ def _csph_checks(base: str, sc: dict, top_schemes: list) -> list[str]:
     other = [s for s in schemes if s not in allowed]
     if other:
         where = f"{base}.schemes" if "schemes" in sc else "schemes"
-        why = " (the 2D window runs AMW and MW: the dichotomy is not measured on it)"
-        why = why if dim == 2 else ""
         own = "" if "schemes" in sc else "; give the scene its own schemes"
         out.append(
             f"{where} = {_show(schemes)}: {_show(other)} not available for a solver = csph "
-            f"scene with dim = {dim} ({base}){why}; allowed: {_show(allowed)}{own}"
+            f"scene with dim = {dim} ({base}); allowed: {_show(allowed)}{own}"
         )
     if st["model"] == "von_mises" and st["yield_stress"] >= st["shear_modulus"]:
         out.append(

@@ -3,7 +3,7 @@
 
 prepare_sample → load_to_target_stage (checkpoint) → piston_point, and
 window_start → control_point (AMW and MW: ``window.methods.amw``/``mw`` unchanged, on
-``SPHWindow`` in 1D, ``SPHWindow2D`` in 2D) and (1D) window_start → dichotomy_state ⇄ dichotomy_trial → dichotomy_point (the loop
+``SPHWindow`` in 1D, ``SPHWindow2D`` in 2D) and window_start → dichotomy_state ⇄ dichotomy_trial → dichotomy_point (the loop
 of ``window.dichotomy``, trials by ``window.methods.fixed_run``); reference_stage gives the
 model's own Hugoniot. ``pipeline`` and ``pipeline_window`` dispatch here on the scene's
 ``solver``. Point files have the MD layout (``io.dataset.point_dataset``) with SI units.
@@ -776,7 +776,7 @@ def control_point(
                          extra)  # fmt: skip
 
 
-# -- the dichotomy on the 1D window ---------------------------------------------------------
+# -- the dichotomy on the window (1D, 2D) -----------------------------------------------------
 
 
 def _dichotomy_times(scene: dict, u_p: float) -> tuple[float, float]:

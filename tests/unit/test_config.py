@@ -91,6 +91,7 @@ def test_copper_config_is_valid_and_filled() -> None:
     assert solid["window"]["dichotomy"]["half_width"] == 100.0  # m/s, schema default
     assert porous["material"]["strength"]["model"] == "von_mises"
     assert porous["numerics"]["dev_mean"] is True
+    assert porous["schemes"] == ["piston", "amw", "mw", "dichotomy"]  # the 2D window: all
     assert load_config(ROOT / "tests/workflow/tiny_cu/config.yaml")["scenes"]["tiny_cu"]
 
 
@@ -123,14 +124,6 @@ def test_copper_config_is_valid_and_filled() -> None:
             "cu_solid",
             lambda s: s["sample"].update(colour="red"),
             "scenes.cu_solid.sample: unknown key(s) ['colour']",
-        ),
-        (
-            "cu_porous",
-            lambda s: s.update(schemes=["piston", "mw", "dichotomy"]),
-            "scenes.cu_porous.schemes = ['piston', 'mw', 'dichotomy']: ['dichotomy'] not "
-            "available for a solver = csph scene with dim = 2 (scenes.cu_porous) (the 2D window "
-            "runs AMW and MW: the dichotomy is not measured on it); allowed: ['piston', 'amw', "
-            "'mw']",
         ),
         (  # the inflow tile must hold a pore of r_max clear of its own image along x
             "cu_porous",
@@ -218,23 +211,15 @@ def test_bad_csph_values_name_key_and_range(scene: str, edit, expect: str) -> No
     assert expect in str(ei.value)
 
 
-def test_csph_scene_refuses_inherited_window_schemes_in_2d() -> None:
-    """A 1D scene inherits every scheme; a 2D one the piston, AMW and MW only."""
+def test_csph_scenes_inherit_every_scheme() -> None:
+    """A CSPH scene, 1D or 2D, inherits every scheme from the top level."""
     cfg = copper()
     cfg["schemes"] = ["piston", "dichotomy"]
     del cfg["scenes"]["cu_solid"]["schemes"]
-    validate_config(copy.deepcopy(cfg))
     del cfg["scenes"]["cu_porous"]["schemes"]
-    with pytest.raises(ConfigError) as ei:
-        validate_config(cfg)
-    msg = str(ei.value)
-    assert (
-        "  schemes = ['piston', 'dichotomy']: ['dichotomy'] not available for a solver = csph "
-        "scene with dim = 2 (scenes.cu_porous) (the 2D window runs AMW and MW: the dichotomy "
-        "is not measured on it); allowed: ['piston', 'amw', 'mw']; give the scene its own "
-        "schemes" in msg
-    )
-    assert "cu_solid" not in msg
+    out = validate_config(cfg)
+    for name in ("cu_solid", "cu_porous"):
+        assert out["scenes"][name].get("schemes", out["schemes"]) == ["piston", "dichotomy"]
 
 
 def test_md_scene_without_solver_is_still_md() -> None:
