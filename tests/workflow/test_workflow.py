@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -71,6 +72,34 @@ def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
     # A second run has nothing to do: every stage is a file.
     r2 = snakemake(tmp_path, "-n")
     assert "Nothing to be done" in r2.stdout + r2.stderr
+    _analysis_notebook_runs_on(tmp_path / "results")
+
+
+def _analysis_notebook_runs_on(results: Path) -> None:
+    """notebooks/hugoniot_analysis (issue 5, item 4) executed on the tiny sweep's results:
+    every cell runs, the fit table has a row per scheme and the reference, the figures are
+    written. (The numbers of a 36-cell sample are not checked here: the fit itself is
+    tested in tests/unit/test_hugoniot_fit.py.)"""
+    import jupytext
+    import nbclient
+
+    nb = jupytext.read(ROOT / "notebooks" / "hugoniot_analysis.py")
+    old = os.environ.get("HUGOMAP_RESULTS")
+    os.environ["HUGOMAP_RESULTS"] = str(results)
+    try:
+        nbclient.NotebookClient(nb, timeout=300, kernel_name="python3",
+                                resources={"metadata": {"path": str(ROOT)}}).execute()  # fmt: skip
+    finally:
+        if old is None:
+            del os.environ["HUGOMAP_RESULTS"]
+        else:
+            os.environ["HUGOMAP_RESULTS"] = old
+    fits = next(c for c in nb.cells if "fit_table = pd.DataFrame(fits)" in c.source)
+    table = fits.outputs[0]["data"]["text/plain"]
+    for scheme in ("piston", "amw", "mw", "dichotomy", "reference"):
+        assert re.search(rf"\btiny\s+{scheme}\b", table), (scheme, table)
+    for png in ("tiny_hugoniot.png", "cost_vs_error.png"):
+        assert (results / "figures" / "notebook" / png).stat().st_size > 10_000, png
 
 
 def _bad_config(tmp_path: Path, edit: str, new: str) -> Path:

@@ -129,3 +129,44 @@ def robust_slope(t: np.ndarray, y: np.ndarray, min_separation: float = 0.25) -> 
     if not far.any():
         return float("nan")
     return float(np.median((y[j] - y[i])[far] / dt[far]))
+
+
+def linear_hugoniot_fit(
+    u_p: np.ndarray, D: np.ndarray, D_err: np.ndarray | None = None
+) -> dict[str, float]:
+    """Weighted least-squares fit of the linear Us–up Hugoniot D = c0 + s·u_p.
+
+    Weights 1/D_err² (equal weights without errors or where an error is missing or zero).
+    The parameter covariance is (XᵀWX)⁻¹, scaled by the reduced χ² when it exceeds 1 (points
+    scattered more than their stated errors: the errors are then taken as relative only).
+    Returns c0, c0_err, s, s_err (units of D and of D/u_p), their correlation ``rho_cs``,
+    ``chi2_red`` and the number of points ``n``; NaN for fewer than two distinct u_p."""
+    u = np.asarray(u_p, dtype=float)
+    d = np.asarray(D, dtype=float)
+    e = np.full_like(d, np.nan) if D_err is None else np.asarray(D_err, dtype=float)
+    ok = np.isfinite(u) & np.isfinite(d)
+    u, d, e = u[ok], d[ok], e[ok]
+    nan = float("nan")
+    out = {"c0": nan, "c0_err": nan, "s": nan, "s_err": nan, "rho_cs": nan,
+           "chi2_red": nan, "n": int(u.size)}  # fmt: skip
+    if u.size < 2 or np.ptp(u) == 0:
+        return out
+    have = np.isfinite(e) & (e > 0)
+    w = np.where(have, 1.0 / np.where(have, e, 1.0) ** 2, 0.0)
+    if not have.all():  # a point without an error: equal weights for all
+        w = np.ones_like(u)
+    X = np.column_stack([np.ones_like(u), u])
+    A = X.T @ (w[:, None] * X)
+    cov = np.linalg.inv(A)
+    c0, s = cov @ (X.T @ (w * d))
+    r = d - (c0 + s * u)
+    dof = u.size - 2
+    chi2 = float(np.sum(w * r * r) / dof) if dof > 0 else nan
+    if not have.all():  # unweighted: the scatter is the only error estimate
+        cov = cov * (chi2 if dof > 0 else nan)
+    elif dof > 0 and chi2 > 1.0:
+        cov = cov * chi2
+    out.update(c0=float(c0), s=float(s), c0_err=float(np.sqrt(cov[0, 0])),
+               s_err=float(np.sqrt(cov[1, 1])), chi2_red=chi2,
+               rho_cs=float(cov[0, 1] / np.sqrt(cov[0, 0] * cov[1, 1])))  # fmt: skip
+    return out

@@ -1,0 +1,202 @@
+# ---
+# jupyter:
+#   jupytext:
+#     formats: ipynb,py:percent
+#     text_representation:
+#       extension: .py
+#       format_name: percent
+#   kernelspec:
+#     display_name: Python 3
+#     language: python
+#     name: python3
+# ---
+
+# %% [markdown]
+# # Hugoniot analysis of a hugomap sweep
+#
+# Opens the aggregated datasets `results/hugoniot/<scene>.nc` (dims `scheme` × `u_p`) with
+# xarray and dask, fits the linear Us–up Hugoniot D = c0 + s·u_p per scheme with its
+# uncertainties, overlays each scene's reference (LJ: the equilibrium-MD Hugoniot;
+# copper: the EOS or the porous model), and charts cost against error and where the
+# methods failed. Units are each dataset's own (`units` attributes): Lennard-Jones reduced
+# units for MD scenes, SI for CSPH scenes.
+#
+# Run it after a sweep (`snakemake --cores 2 ...`) from the repository root; set
+# `HUGOMAP_RESULTS` to read another results folder (the test suite points it at the tiny
+# sweep's).
+
+# %%
+import os
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use(os.environ.get("MPLBACKEND", "Agg"))
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+import xarray as xr  # noqa: E402
+
+from hugomap.analysis.stats import linear_hugoniot_fit  # noqa: E402
+from hugomap.status import FAILURES  # noqa: E402
+
+RESULTS = Path(os.environ.get("HUGOMAP_RESULTS", "results"))
+FIGURES = RESULTS / "figures" / "notebook"
+FIGURES.mkdir(parents=True, exist_ok=True)
+files = sorted((RESULTS / "hugoniot").glob("*.nc"))
+print(f"{len(files)} scene(s) in {RESULTS / 'hugoniot'}:", [f.stem for f in files])
+
+# %% [markdown]
+# ## The datasets
+# One file per scene, opened lazily (dask chunks); `status` says which points hold a
+# steady state (`ok`), which missed a jump-condition tolerance (`not_converged`), and which
+# failed (any other status: the cause is in `hugomap.status.FAILURES`).
+
+# %%
+scenes = {f.stem: xr.open_dataset(f, chunks={}) for f in files}
+for name, ds in scenes.items():
+    units = ds["D"].attrs.get("units", "")
+    print(f"{name}: schemes {list(ds['scheme'].values)}, u_p {list(ds['u_p'].values)} "
+          f"[{ds['u_p'].attrs.get('units', units)}]")  # fmt: skip
+
+USABLE = ("ok", "not_converged")
+
+
+def points(ds: xr.Dataset) -> pd.DataFrame:
+    """One row per (scheme, u_p): the state, its errors, the status and the cost."""
+    cols = [c for c in ("D", "D_err", "u_p_measured", "P", "P_err", "rho", "status",
+                        "cpu_s", "ref_P_at_V") if c in ds]  # fmt: skip
+    return ds[cols].to_dataframe().reset_index()
+
+
+tables = {name: points(ds.compute()) for name, ds in scenes.items()}
+next(iter(tables.values())) if tables else None
+
+# %% [markdown]
+# ## Linear Us–up fits
+# Weighted least squares on the usable points of each scheme (`ok` and `not_converged`),
+# weights 1/D_err², covariance scaled by the reduced χ² where the points scatter more than
+# their errors (`hugomap.analysis.stats.linear_hugoniot_fit`). The piston's u_p is the
+# imposed one; a window scheme's is its own (`u_p` of the dataset is the requested value,
+# MW's actual amplitude is `u_p_set`).
+
+# %%
+fits = []
+for name, ds in scenes.items():
+    ds = ds.compute()
+    for scheme in ds["scheme"].values:
+        p = ds.sel(scheme=scheme)
+        use = np.isin(p["status"].values.astype(str), USABLE)
+        u = p["u_p_set"].values if ("u_p_set" in p and scheme == "mw") else p["u_p"].values
+        f = linear_hugoniot_fit(u[use], p["D"].values[use], p["D_err"].values[use])
+        fits.append({"scene": name, "scheme": str(scheme), **f})
+    if "ref_u_p" in ds and "ref_D" in ds:
+        ok = np.isfinite(ds["ref_u_p"].values) & np.isfinite(ds["ref_D"].values)
+        ok &= ds["ref_u_p"].values > 0
+        err = ds["ref_D_err"].values[ok] if "ref_D_err" in ds else None
+        f = linear_hugoniot_fit(ds["ref_u_p"].values[ok], ds["ref_D"].values[ok], err)
+        fits.append({"scene": name, "scheme": "reference", **f})
+fit_table = pd.DataFrame(fits)
+fit_table
+
+# %% [markdown]
+# ## D against u_p and P against V, every scheme with the reference
+
+# %%
+MARK = {"piston": "o", "amw": "s", "mw": "^", "dichotomy": "D", "reference": "."}
+for name, ds in scenes.items():
+    ds = ds.compute()
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    for scheme in ds["scheme"].values:
+        p = ds.sel(scheme=scheme)
+        use = np.isin(p["status"].values.astype(str), USABLE)
+        u = p["u_p_set"].values if ("u_p_set" in p and scheme == "mw") else p["u_p"].values
+        m = MARK.get(str(scheme), "x")
+        ax1.errorbar(u[use], p["D"].values[use], yerr=p["D_err"].values[use], fmt=m,
+                     label=str(scheme), capsize=2)  # fmt: skip
+        ax2.errorbar(p["V"].values[use], p["P"].values[use], yerr=p["P_err"].values[use],
+                     fmt=m, label=str(scheme), capsize=2)  # fmt: skip
+        row = fit_table[(fit_table.scene == name) & (fit_table.scheme == str(scheme))]
+        if len(row) and np.isfinite(row["s"].iloc[0]):
+            uu = np.linspace(0.0, float(np.nanmax(ds["u_p"].values)) * 1.05, 50)
+            ax1.plot(uu, row["c0"].iloc[0] + row["s"].iloc[0] * uu, lw=0.8)
+    if "ref_V" in ds and "ref_P" in ds:
+        o = np.argsort(ds["ref_V"].values)
+        ax2.plot(ds["ref_V"].values[o], ds["ref_P"].values[o], "k-", lw=1, label="reference")
+    if "ref_u_p" in ds and "ref_D" in ds:
+        o = np.argsort(ds["ref_u_p"].values)
+        ax1.plot(ds["ref_u_p"].values[o], ds["ref_D"].values[o], "k-", lw=1, label="reference")
+    ax1.set_xlabel(f"u_p [{ds['u_p'].attrs.get('units', '')}]")
+    ax1.set_ylabel(f"D [{ds['D'].attrs.get('units', '')}]")
+    ax2.set_xlabel(f"V [{ds['V'].attrs.get('units', '')}]")
+    ax2.set_ylabel(f"P [{ds['P'].attrs.get('units', '')}]")
+    ax1.legend(fontsize=8)
+    ax1.set_title(name)
+    fig.tight_layout()
+    fig.savefig(FIGURES / f"{name}_hugoniot.png", dpi=120)
+
+# %% [markdown]
+# ## Cost against error
+# Per point: CPU seconds (all stages of the point: loading, window set-up, control or
+# trials, averaging) against the relative error of P and of D from the scene's reference
+# Hugoniot at the point's u_p (MW: the amplitude it reached). This is the sweep's version
+# of the campaign chart (issue 5), from whatever points this results folder holds.
+
+# %%
+rows = []
+for name, ds in scenes.items():
+    ds = ds.compute()
+    if not all(k in ds for k in ("ref_u_p", "ref_P", "ref_D")):
+        continue
+    o = np.argsort(ds["ref_u_p"].values)
+    ru, rp, rd = (ds[k].values[o] for k in ("ref_u_p", "ref_P", "ref_D"))
+    keep = np.isfinite(ru) & np.isfinite(rp) & np.isfinite(rd) & (ru > 0)
+    ru, rp, rd = ru[keep], rp[keep], rd[keep]
+    for scheme in ds["scheme"].values:
+        p = ds.sel(scheme=scheme)
+        u_all = p["u_p_set"].values if ("u_p_set" in p and scheme == "mw") else p["u_p"].values
+        for i, u in enumerate(u_all):
+            st = str(p["status"].values[i])
+            if st not in USABLE or not (ru.size and ru.min() <= u <= ru.max()):
+                continue
+            rows.append({
+                "scene": name, "scheme": str(scheme), "u_p": float(u), "status": st,
+                "cpu_s": float(p["cpu_s"].values[i]),
+                "P_rel_err": abs(float(p["P"].values[i]) / np.interp(u, ru, rp) - 1.0),
+                "D_rel_err": abs(float(p["D"].values[i]) / np.interp(u, ru, rd) - 1.0),
+            })  # fmt: skip
+cost = pd.DataFrame(rows, columns=["scene", "scheme", "u_p", "status", "cpu_s", "P_rel_err",
+                                   "D_rel_err"])  # fmt: skip
+if len(cost):
+    fig, axes = plt.subplots(1, 2, figsize=(9, 4))
+    for ax, col in zip(axes, ("P_rel_err", "D_rel_err"), strict=True):
+        for scheme, g in cost.groupby("scheme"):
+            ax.loglog(g["cpu_s"], g[col].clip(lower=1e-5), MARK.get(scheme, "x"), label=scheme)
+        ax.set_xlabel("CPU per point [s]")
+        ax.set_ylabel(f"{col.split('_')[0]}: |x / x_ref(u_p) − 1|")
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(FIGURES / "cost_vs_error.png", dpi=120)
+cost
+
+# %% [markdown]
+# ## Where the methods failed
+# Every point that is not a usable state, with the cause class of its status.
+
+# %%
+fails = []
+for name, ds in scenes.items():
+    ds = ds.compute()
+    for scheme in ds["scheme"].values:
+        p = ds.sel(scheme=scheme)
+        for i, up in enumerate(p["u_p"].values):
+            st = str(p["status"].values[i])
+            if st in USABLE:
+                continue
+            where, why = FAILURES.get(st, ("?", "unregistered status"))
+            fails.append({"scene": name, "scheme": str(scheme), "u_p": float(up), "status": st,
+                          "stage": where, "cause": why,
+                          "diagnostic": str(p["diagnostic"].values[i])[:120]})  # fmt: skip
+failures = pd.DataFrame(fails, columns=["scene", "scheme", "u_p", "status", "stage", "cause",
+                                        "diagnostic"])  # fmt: skip
+failures
