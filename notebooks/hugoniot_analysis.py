@@ -5,6 +5,8 @@
 #     text_representation:
 #       extension: .py
 #       format_name: percent
+#       format_version: '1.3'
+#       jupytext_version: 1.19.6
 #   kernelspec:
 #     display_name: Python 3
 #     language: python
@@ -53,7 +55,8 @@ print(f"{len(files)} scene(s) in {RESULTS / 'hugoniot'}:", [f.stem for f in file
 # failed (any other status: the cause is in `hugomap.status.FAILURES`).
 
 # %%
-scenes = {f.stem: xr.open_dataset(f, chunks={}) for f in files}
+lazy = {f.stem: xr.open_dataset(f, chunks={}) for f in files}  # dask-backed
+scenes = {name: ds.compute() for name, ds in lazy.items()}  # small: read each file once
 for name, ds in scenes.items():
     units = ds["D"].attrs.get("units", "")
     print(f"{name}: schemes {list(ds['scheme'].values)}, u_p {list(ds['u_p'].values)} "
@@ -69,7 +72,7 @@ def points(ds: xr.Dataset) -> pd.DataFrame:
     return ds[cols].to_dataframe().reset_index()
 
 
-tables = {name: points(ds.compute()) for name, ds in scenes.items()}
+tables = {name: points(ds) for name, ds in scenes.items()}
 next(iter(tables.values())) if tables else None
 
 # %% [markdown]
@@ -83,7 +86,6 @@ next(iter(tables.values())) if tables else None
 # %%
 fits = []
 for name, ds in scenes.items():
-    ds = ds.compute()
     for scheme in ds["scheme"].values:
         p = ds.sel(scheme=scheme)
         use = np.isin(p["status"].values.astype(str), USABLE)
@@ -105,7 +107,6 @@ fit_table
 # %%
 MARK = {"piston": "o", "amw": "s", "mw": "^", "dichotomy": "D", "reference": "."}
 for name, ds in scenes.items():
-    ds = ds.compute()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
     for scheme in ds["scheme"].values:
         p = ds.sel(scheme=scheme)
@@ -145,7 +146,6 @@ for name, ds in scenes.items():
 # %%
 rows = []
 for name, ds in scenes.items():
-    ds = ds.compute()
     if not all(k in ds for k in ("ref_u_p", "ref_P", "ref_D")):
         continue
     o = np.argsort(ds["ref_u_p"].values)
@@ -186,7 +186,6 @@ cost
 # %%
 fails = []
 for name, ds in scenes.items():
-    ds = ds.compute()
     for scheme in ds["scheme"].values:
         p = ds.sel(scheme=scheme)
         for i, up in enumerate(p["u_p"].values):

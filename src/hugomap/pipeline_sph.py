@@ -50,7 +50,7 @@ from .analysis.stats import CorrelatedSlope, block_average, line_fit
 from .config import fill_csph_defaults
 from .eos import EOS
 from .io.atomic import write_json, write_netcdf
-from .io.dataset import point_dataset, scalar_vars, solver_tables
+from .io.dataset import control_vars, point_dataset, scalar_vars, solver_tables
 from .sph import checkpoint as ckpt
 from .sph.sample import Sample, SampleError, lattice_1d, lattice_2d, porous_2d, porous_tile_2d
 from .sph.simulation import CSPHSimulation, SPHUnstable, profile_fields
@@ -594,24 +594,6 @@ def _inflow_tile(scene: dict, info: dict) -> tuple[InflowTile, dict]:
     return InflowTile.from_sample(tile), rec
 
 
-def _control_vars(c) -> dict:
-    a = c.arrays()
-    names = {
-        "t": ("s", "end of averaging window k"),
-        "a": ("s^-1", "slope a_k of omega(t) = a_k t + b_k"),
-        "a_err": ("s^-1", "standard error of a_k"),
-        "omega": ("1", "mean omega over window k"),
-        "u_in": ("m s^-1", "inflow velocity (window frame)"),
-        "u_out": ("m s^-1", "outflow velocity (window frame)"),
-        "du": ("m s^-1", "correction applied after window k"),
-    }
-    out = {f"control_{k}": ("window_k", a[k], {"units": u, "long_name": ln})
-           for k, (u, ln) in names.items()}  # fmt: skip
-    out["omega_t"] = ("omega_sample", a["samples_t"], {"units": "s", "long_name": "time"})
-    out["omega_value"] = ("omega_sample", a["samples_omega"], {"units": "1", "long_name": "omega"})
-    return out
-
-
 class SlabError(Exception):
     """A window measurement without its slab behind the front (``status``, ``diagnostic``)."""
 
@@ -771,7 +753,7 @@ def control_point(
         status, diagnostic = exc.status, exc.diagnostic
     cost = _cost(t0, c0, float(win.n_particles * (win.sim.steps - steps0)),
                  json.loads(ds.attrs.get("cost", "{}")))  # fmt: skip
-    extra = _control_vars(hist) if hist is not None and hist.t else None
+    extra = control_vars(hist, "s", "m s^-1") if hist is not None and hist.t else None
     return _window_point(out, scheme, scene, u_p, pole, win, values, status, diagnostic, cost,
                          extra)  # fmt: skip
 

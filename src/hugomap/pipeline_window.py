@@ -20,7 +20,7 @@ import xarray as xr
 from .analysis.shock import analyse_piston, front_position, region_state
 from .analysis.stats import CorrelatedSlope, line_fit
 from .io.atomic import write_json, write_netcdf
-from .io.dataset import POLE_VARS, point_dataset, scalar_vars
+from .io.dataset import POLE_VARS, control_vars, point_dataset, scalar_vars
 from .md.profiles import fields_from_sums
 from .md.simulation import MDSimulation, SolverUnstable
 from .md.window import MDWindow, WindowError, make_reservoir
@@ -204,24 +204,6 @@ def _profile_vars(h: dict, bw: float, area: float) -> dict:
     return out
 
 
-def _control_vars(c: ControlHistory) -> dict:
-    a = c.arrays()
-    names = {
-        "t": ("tau", "end of averaging window k"),
-        "a": ("tau^-1", "slope a_k of omega(t) = a_k t + b_k"),
-        "a_err": ("tau^-1", "standard error of a_k"),
-        "omega": ("1", "mean omega over window k"),
-        "u_in": ("sigma tau^-1", "inflow velocity (window frame)"),
-        "u_out": ("sigma tau^-1", "outflow velocity (window frame)"),
-        "du": ("sigma tau^-1", "correction applied after window k"),
-    }
-    out = {f"control_{k}": ("window_k", a[k], {"units": u, "long_name": ln})
-           for k, (u, ln) in names.items()}  # fmt: skip
-    out["omega_t"] = ("omega_sample", a["samples_t"], {"units": "tau", "long_name": "time"})
-    out["omega_value"] = ("omega_sample", a["samples_omega"], {"units": "1", "long_name": "omega"})
-    return out
-
-
 def _finish_point(
     out, scheme: str, scene: dict, u_p: float, pole: dict, win: MDWindow, values: dict,
     h: dict | None, control: ControlHistory | None, status: str, diagnostic: str,
@@ -244,7 +226,7 @@ def _finish_point(
     if h is not None:
         extra.update(_profile_vars(h, scene["shock"]["bin_width"], win.area))
     if control is not None and control.t:
-        extra.update(_control_vars(control))
+        extra.update(control_vars(control, "tau", "sigma tau^-1"))
     ds = ds.assign(extra)
     ds.attrs.update(u_in=win.u_in, u_out=win.u_out, window_length=win.geom.length)
     return write_netcdf(ds, out)

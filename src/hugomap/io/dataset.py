@@ -155,6 +155,28 @@ def provenance_attrs(config: dict | None) -> dict[str, str]:
     }
 
 
+def control_vars(history, time_unit: str, velocity_unit: str) -> dict:
+    """The control loop's record (``window.methods.ControlHistory``) as dataset variables:
+    per averaging window k ``control_{t, a, a_err, omega, u_in, u_out, du}`` and the raw ω
+    samples ``omega_t``, ``omega_value``, in the solver's units (e.g. "tau", "sigma tau^-1";
+    "s", "m s^-1")."""
+    a = history.arrays()
+    names = {
+        "t": (time_unit, "end of averaging window k"),
+        "a": (f"{time_unit}^-1", "slope a_k of omega(t) = a_k t + b_k"),
+        "a_err": (f"{time_unit}^-1", "standard error of a_k"),
+        "omega": ("1", "mean omega over window k"),
+        "u_in": (velocity_unit, "inflow velocity (window frame)"),
+        "u_out": (velocity_unit, "outflow velocity (window frame)"),
+        "du": (velocity_unit, "correction applied after window k"),
+    }
+    out = {f"control_{k}": ("window_k", a[k], {"units": u, "long_name": ln})
+           for k, (u, ln) in names.items()}  # fmt: skip
+    out["omega_t"] = ("omega_sample", a["samples_t"], {"units": time_unit, "long_name": "time"})
+    out["omega_value"] = ("omega_sample", a["samples_omega"], {"units": "1", "long_name": "omega"})
+    return out
+
+
 def point_dataset(
     values: dict,
     pole: dict,

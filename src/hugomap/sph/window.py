@@ -22,6 +22,15 @@ from .state import SPHState
 
 # /2: the simulation inside is an ``sph.checkpoint`` (format hugomap-sph-checkpoint/1)
 WINDOW_FORMAT = "hugomap-sph-window/2"
+#: The per-particle arrays of an ``SPHState`` that the boundaries cut and extend.
+STATE_ARRAYS = ("x", "v", "m", "rho", "e", "S", "eps_p", "l")
+
+
+def _fresh_arrays(x, v, m, rho, e, l) -> dict[str, np.ndarray]:
+    """Fresh, unstressed material (S = 0, no plastic strain) as ``STATE_ARRAYS``."""
+    n = m.size
+    return {"x": x, "v": v, "m": m, "rho": rho, "e": e, "S": np.zeros((n, 4)),
+            "eps_p": np.zeros(n), "l": l}  # fmt: skip
 
 
 @dataclass
@@ -167,6 +176,10 @@ class SPHWindow:
             self._update_boundaries()
 
     def _update_boundaries(self) -> None:
+        """Release the frozen inflow particles that crossed x_hi and lay fresh ones behind
+        (``_inflow``, ``_fresh``); cut the outflow when its wall has receded ``cut_every``
+        behind x_lo: the mobile particles behind x_lo are removed and the wall put halfway
+        between the last removed and the first kept particle."""
         g = self.geom
         sim = self.sim
         st = sim.state
@@ -178,11 +191,8 @@ class SPHWindow:
                 f"the outflow face moved {sim.walls[0] - g.x_lo:.3g} m into the window "
                 f"(u_out = {self.u_out:.4g} m/s > 0 for too long)",
             )
-        frozen = sim.frozen.copy()
         xs = st.x[:, 0]
-        frozen &= xs >= g.x_hi  # release what crossed x_hi
-        n_frozen = int(np.count_nonzero(frozen))
-        add = g.n_inflow - n_frozen if n_frozen < g.n_inflow // 2 + 1 else 0
+        frozen, add = self._inflow(xs)
         cut = sim.walls[0] < g.x_lo - g.cut_every
         if not (add or cut):
             sim.frozen = frozen
@@ -192,25 +202,39 @@ class SPHWindow:
         if cut:
             behind = (xs < g.x_lo) & ~frozen
             keep = ~behind
+            self._removed(float(np.sum(st.m[behind])))
             if behind.any() and keep.any():
                 wall = 0.5 * (float(xs[behind].max()) + float(xs[keep].min()))
-        arrays = {k: getattr(st, k)[keep] for k in ("x", "v", "m", "rho", "e", "S", "eps_p", "l")}
+        arrays = {k: getattr(st, k)[keep] for k in STATE_ARRAYS}
         frozen = frozen[keep]
         if add:
-            last = float(xs[sim.frozen].max()) if sim.frozen.any() else float(xs.max())
-            xn = last + g.dx0 * np.arange(1, add + 1)
-            arrays["x"] = np.concatenate([arrays["x"], xn[:, None]])
-            arrays["v"] = np.concatenate([arrays["v"], np.full((add, 1), self.u_in)])
-            arrays["m"] = np.concatenate([arrays["m"], np.full(add, self.m0)])
-            arrays["rho"] = np.concatenate([arrays["rho"], np.full(add, self.rho0)])
-            arrays["e"] = np.concatenate([arrays["e"], np.full(add, self.e0)])
-            arrays["S"] = np.concatenate([arrays["S"], np.zeros((add, 4))])
-            arrays["eps_p"] = np.concatenate([arrays["eps_p"], np.zeros(add)])
-            arrays["l"] = np.concatenate([arrays["l"], np.full(add, g.dx0)])
-            frozen = np.concatenate([frozen, np.ones(add, dtype=bool)])
+            fresh = self._fresh(add, xs)
+            arrays = {k: np.concatenate([arrays[k], fresh[k]]) for k in STATE_ARRAYS}
+            frozen = np.concatenate([frozen, np.ones(fresh["m"].size, dtype=bool)])
         sim.walls[0] = wall
         sim.replace_particles(SPHState(**arrays, time=st.time), frozen)
         self.n_updates += 1
+
+    def _inflow(self, xs: np.ndarray) -> tuple[np.ndarray, int]:
+        """(frozen mask after releasing what crossed x_hi, number of fresh particles to lay):
+        the frozen layer is topped up to ``n_inflow`` when fewer than half remain."""
+        g = self.geom
+        frozen = self.sim.frozen & (xs >= g.x_hi)
+        n_frozen = int(np.count_nonzero(frozen))
+        return frozen, (g.n_inflow - n_frozen if n_frozen < g.n_inflow // 2 + 1 else 0)
+
+    def _fresh(self, add: int, xs: np.ndarray) -> dict[str, np.ndarray]:
+        """``add`` particles of fresh material (ρ0, e0, S = 0, spacing dx0) behind the last
+        frozen one, moving at u_in."""
+        f = self.sim.frozen
+        last = float(xs[f].max()) if f.any() else float(xs.max())
+        xn = last + self.geom.dx0 * np.arange(1, add + 1)
+        return _fresh_arrays(xn[:, None], np.full((add, 1), self.u_in), np.full(add, self.m0),
+                             np.full(add, self.rho0), np.full(add, self.e0),
+                             np.full(add, self.geom.dx0))  # fmt: skip
+
+    def _removed(self, mass: float) -> None:
+        """Mass [kg/m², or kg/m in 2D] cut out behind x_lo (the 2D window counts it)."""
 
     def galilean_shift(self, du: float) -> None:
         """Add ``du`` [m/s] to every velocity (mobile and frozen), u_in, u_out and the wall."""
@@ -490,57 +514,30 @@ class SPHWindow2D(SPHWindow):
         self.x_next += self.sim.frozen_velocity * (t - self.t_ref)
         self.t_ref = t
 
-    def _update_boundaries(self) -> None:
+    def _inflow(self, xs: np.ndarray) -> tuple[np.ndarray, int]:
+        """Release what crossed x_hi (its mass counted in ``mass_in``); lay the tile's next
+        columns when the frozen layer is thinner than (n_inflow/2 + 1)·dx."""
         g = self.geom
-        sim = self.sim
-        st = sim.state
-        if not self.u_in < 0:
-            raise SPHUnstable("no_inflow", f"u_in = {self.u_in:.4g} m/s must be < 0")
-        if sim.walls[0] > g.x_lo + g.cut_every:
-            raise SPHUnstable(
-                "outflow_reversed",
-                f"the outflow face moved {sim.walls[0] - g.x_lo:.3g} m into the window "
-                f"(u_out = {self.u_out:.4g} m/s > 0 for too long)",
-            )
         self._sync_inflow()
-        xs = st.x[:, 0]
-        frozen = sim.frozen & (xs >= g.x_hi)  # release what crossed x_hi
-        self.mass_in += float(np.sum(st.m[sim.frozen & ~frozen]))
+        frozen = self.sim.frozen & (xs >= g.x_hi)
+        self.mass_in += float(np.sum(self.sim.state.m[self.sim.frozen & ~frozen]))
         depth = self.x_next - g.x_hi
         add = 0
         if depth < (g.n_inflow // 2 + 1) * g.dx0:
             add = int(min(math.ceil(((g.n_inflow + 1) * g.dx0 - depth) / g.dx0), self.tile.n_cols))
-        cut = sim.walls[0] < g.x_lo - g.cut_every
-        if not (add or cut):
-            sim.frozen = frozen
-            return
-        keep = np.ones(st.n, dtype=bool)
-        wall = float(sim.walls[0])
-        if cut:
-            behind = (xs < g.x_lo) & ~frozen
-            keep = ~behind
-            self.mass_out += float(np.sum(st.m[behind]))
-            if behind.any() and keep.any():
-                wall = 0.5 * (float(xs[behind].max()) + float(xs[keep].min()))
-        arrays = {k: getattr(st, k)[keep] for k in ("x", "v", "m", "rho", "e", "S", "eps_p", "l")}
-        frozen = frozen[keep]
-        if add:
-            sel, pos = self.tile.chunk(self.tile_col, add, self.x_next)
-            n = sel.size
-            arrays["x"] = np.concatenate([arrays["x"], pos])
-            arrays["v"] = np.concatenate([arrays["v"], np.tile([self.u_in, 0.0], (n, 1))])
-            arrays["m"] = np.concatenate([arrays["m"], self.tile.m[sel]])
-            arrays["rho"] = np.concatenate([arrays["rho"], self.tile.rho[sel]])
-            arrays["e"] = np.concatenate([arrays["e"], np.full(n, self.e0)])
-            arrays["S"] = np.concatenate([arrays["S"], np.zeros((n, 4))])
-            arrays["eps_p"] = np.concatenate([arrays["eps_p"], np.zeros(n)])
-            arrays["l"] = np.concatenate([arrays["l"], self.tile.l[sel]])
-            frozen = np.concatenate([frozen, np.ones(n, dtype=bool)])
-            self.x_next += add * g.dx0
-            self.tile_col = (self.tile_col + add) % self.tile.n_cols
-        sim.walls[0] = wall
-        sim.replace_particles(SPHState(**arrays, time=st.time), frozen)
-        self.n_updates += 1
+        return frozen, add
+
+    def _fresh(self, add: int, xs: np.ndarray) -> dict[str, np.ndarray]:
+        """The tile's next ``add`` columns from ``x_next`` (the cursor moves on)."""
+        sel, pos = self.tile.chunk(self.tile_col, add, self.x_next)
+        n = sel.size
+        self.x_next += add * self.geom.dx0
+        self.tile_col = (self.tile_col + add) % self.tile.n_cols
+        return _fresh_arrays(pos, np.tile([self.u_in, 0.0], (n, 1)), self.tile.m[sel],
+                             self.tile.rho[sel], np.full(n, self.e0), self.tile.l[sel])  # fmt: skip
+
+    def _removed(self, mass: float) -> None:
+        self.mass_out += mass
 
     def galilean_shift(self, du: float) -> None:
         """Add ``du`` [m/s] to every x velocity (mobile and frozen), u_in, u_out and the wall;
