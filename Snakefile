@@ -33,6 +33,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/md.smk"
 include: "workflow/rules/window.smk"
 include: "workflow/rules/hugoniot.smk"
+include: "workflow/rules/campaign.smk"
 
 
 rule all:

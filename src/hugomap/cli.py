@@ -69,6 +69,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("aggregate")
     p.add_argument("--pv", required=True)
     p.add_argument("--dup", required=True)
+    p = sub.add_parser(
+        "campaign", help="join a campaign's aggregates; draw the chart and the stability map"
+    )
+    p.add_argument("--config-json", required=True, help="the config without its scenes")
+    p.add_argument("--out", required=True, help="the campaign dataset (netCDF)")
+    p.add_argument("--chart", required=True, help="speed-accuracy chart (PNG)")
+    p.add_argument("--map", required=True, help="stability map (PNG)")
+    p.add_argument("aggregates", nargs="+", help="results/hugoniot/<scene>.nc of its scenes")
     p = sub.add_parser("history", help="history figure of one window point")
     p.add_argument("point")
     p.add_argument("--out", required=True)
@@ -131,6 +139,19 @@ def main(argv: list[str] | None = None) -> int:
         from .figures import hugoniot_figures
 
         hugoniot_figures(args.aggregate, args.pv, args.dup)
+    elif args.cmd == "campaign":
+        import xarray as xr
+
+        from .campaign import write_campaign
+        from .config import validate_config
+        from .figures import speed_accuracy_figure, stability_map_figure
+
+        cfg = validate_config(json.loads(args.config_json))  # expands the campaign's scenes
+        out = write_campaign(cfg, args.aggregates, args.out)
+        with xr.open_dataset(out, engine="netcdf4") as ds:
+            ds = ds.load()
+        speed_accuracy_figure(ds, args.chart)
+        stability_map_figure(ds, args.map)
     elif args.cmd == "history":
         from .figures import window_history_figure
 

@@ -481,8 +481,13 @@ def validate_config(cfg: Any, schema: dict | None = None) -> dict:
     other exception escapes.
     """
     problems = _huge_integers(cfg)
+    generated: list = []
     if isinstance(cfg, dict):
         _unshare(cfg)
+        if not problems:
+            from .campaign import expand_campaign
+
+            generated = expand_campaign(cfg)  # the campaign's variants become scenes
     if not problems:
         schema = schema or load_schema()
         try:
@@ -498,6 +503,13 @@ def validate_config(cfg: Any, schema: dict | None = None) -> dict:
     if not problems:
         problems = _cross_checks(cfg)
     if problems:
+        for v in generated:  # say where a generated scene's problem comes from
+            problems = [
+                f"{m} [scene made by campaign.cases.{v.case}, {v.study} {v.label}]"
+                if re.match(rf"scenes\.{v.scene}(?![A-Za-z0-9_])", m)
+                else m
+                for m in problems
+            ]
         raise ConfigError("invalid config:\n  " + "\n  ".join(problems))
     return cfg
 

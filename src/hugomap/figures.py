@@ -151,3 +151,140 @@ def window_history_figure(point: str | os.PathLike, out: str | os.PathLike) -> N
     fig.tight_layout()
     fig.savefig(out)
     plt.close(fig)
+
+
+# -- the validation campaign (hugomap.campaign) ---------------------------------------------
+SCHEME_MARKERS = {"piston": "s", "amw": "o", "mw": "^", "dichotomy": "D"}
+OUTCOME_COLORS = {"ok": "tab:green", "not_converged": "goldenrod"}
+
+
+def speed_accuracy_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
+    """CPU per point against the RMS relative error of P and of D, one marker per scheme
+    and resolution (``campaign.settings``), a row per case; the Pareto front as a staircase.
+    A setting with a failed point has no error: it is drawn as a cross on the top edge."""
+    cases = list(dict.fromkeys(ds["setting_case"].values))
+    fig, axes = plt.subplots(len(cases), 2, figsize=(10, 3.6 * len(cases)), squeeze=False)
+    variants = list(dict.fromkeys(ds["setting_variant"].values))
+    colors = {v: plt.cm.viridis(i / max(len(variants) - 1, 1)) for i, v in enumerate(variants)}
+    for r, case in enumerate(cases):
+        sel = ds["setting_case"].values == case
+        cpu = ds["setting_cpu_s"].values[sel]
+        for c, q in enumerate(("P", "D")):
+            ax = axes[r, c]
+            err = np.abs(ds[f"setting_err_{q}"].values[sel])
+            ok = np.isfinite(err)
+            top = 2.0 * np.nanmax(err) if ok.any() else 1.0
+            for i in range(sel.sum()):
+                scheme = str(ds["setting_scheme"].values[sel][i])
+                variant = str(ds["setting_variant"].values[sel][i])
+                y = max(err[i], 1e-5) if ok[i] else top
+                ax.scatter(cpu[i], y, marker=SCHEME_MARKERS.get(scheme, "x") if ok[i] else "x",
+                           color=colors[variant], s=55, zorder=3,
+                           edgecolors="k" if ok[i] else None, linewidths=0.5)  # fmt: skip
+            front = ds[f"setting_pareto_{q}"].values[sel].astype(bool)
+            o = np.argsort(cpu[front])
+            if front.any():
+                fx, fy = cpu[front][o], np.maximum(err[front][o], 1e-5)
+                ax.step(np.r_[fx, fx[-1] * 3], np.r_[fy, fy[-1]], where="post", color="k",
+                        lw=1, ls="--", zorder=2, label="Pareto front")  # fmt: skip
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel("CPU per point [s]")
+            ax.set_ylabel(f"RMS |{q}/{q}_ref − 1|")
+            ax.set_title(f"{case}: {q}", fontsize=10)
+            ax.grid(True, which="both", alpha=0.25)
+    handles = [plt.Line2D([], [], marker=m, ls="", color="grey", markeredgecolor="k", label=s)
+               for s, m in SCHEME_MARKERS.items()]  # fmt: skip
+    handles += [plt.Line2D([], [], marker="o", ls="", color=colors[v], label=v) for v in variants]
+    handles += [plt.Line2D([], [], marker="x", ls="", color="grey", label="a point failed"),
+                plt.Line2D([], [], ls="--", color="k", label="Pareto front")]  # fmt: skip
+    fig.legend(handles=handles, loc="upper center", ncol=min(len(handles), 6), fontsize=8)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.5 / (3.6 * len(cases))))
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+
+
+def stability_map_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
+    """Where each scheme converged or failed: u_p/c0 across, a panel per case and axis.
+
+    The strength panel holds the stability resolution's points (a row per scheme); each
+    axis panel a row per axis value and scheme, the default value taken from the strength
+    panel's points. Colour: the outcome (ok, not_converged, or the failure status, whose
+    class from ``status.FAILURES`` is in the legend); marker: the scheme."""
+    import json
+
+    from .status import FAILURES
+
+    cases = json.loads(ds.attrs.get("cases", "{}"))
+    axes_meta = json.loads(ds.attrs.get("axes", "{}"))
+    panels = []  # (case, axis or "")
+    for case, meta in cases.items():
+        if "stability_variant" in meta:
+            panels.append((case, ""))
+            panels += [(case, a) for a in axes_meta.get(case, {})]
+    if not panels:
+        fig, ax = plt.subplots(figsize=(4, 2))
+        ax.text(0.5, 0.5, "no stability map in this campaign", ha="center", va="center")
+        ax.axis("off")
+        fig.savefig(out, dpi=100)
+        plt.close(fig)
+        return
+    statuses = list(dict.fromkeys(["ok", "not_converged", *sorted(set(ds["status"].values))]))
+    failed = [s for s in statuses if s not in OUTCOME_COLORS]
+    palette = ["tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:blue", "tab:cyan",
+               "tab:olive", "tab:gray", "black", "tab:orange"]  # fmt: skip
+    color = {**OUTCOME_COLORS, **{s: palette[i % len(palette)] for i, s in enumerate(failed)}}
+    ncol = min(3, len(panels))
+    nrow = -(-len(panels) // ncol)
+    fig, grid = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 3.4 * nrow), squeeze=False)
+    case_v, variant_v = ds["case"].values, ds["variant"].values
+    axis_v, scheme_v = ds["axis"].values, ds["scheme"].values
+    x_all = ds["u_p_over_c0"].values
+    for k, (case, axis) in enumerate(panels):
+        ax = grid[k // ncol, k % ncol]
+        base = (case_v == case) & (variant_v == cases[case]["stability_variant"])
+        rows: list[tuple[str, np.ndarray]] = []  # (label, mask) bottom to top
+        if not axis:
+            for s in dict.fromkeys(scheme_v[base]):
+                rows.append((s, base & (scheme_v == s)))
+            title = f"{case}: shock strength ({cases[case]['stability_variant']} resolution)"
+        else:
+            meta = axes_meta[case][axis]
+            on = (case_v == case) & (axis_v == axis)
+            schemes = list(dict.fromkeys(scheme_v[on]))
+            values = sorted({*ds["axis_value"].values[on].astype(float), meta["base"]})
+            for val in values:
+                for s in schemes:
+                    if val == meta["base"]:
+                        m = base & (scheme_v == s)
+                        tag = f"{val:.3g} (default)"
+                    else:
+                        m = on & (scheme_v == s) & np.isclose(ds["axis_value"].values, val)
+                        tag = f"{val:.3g}"
+                    rows.append((f"{s} {tag}", m))
+            unit = meta["unit"]
+            title = f"{case}: {' + '.join(meta['keys'])}" + (f" [{unit}]" if unit != "1" else "")
+        for y, (label, m) in enumerate(rows):
+            for i in np.flatnonzero(m):
+                st = str(ds["status"].values[i])
+                ax.scatter(x_all[i], y, marker=SCHEME_MARKERS.get(str(scheme_v[i]), "x"),
+                           color=color.get(st, "k"), s=60, edgecolors="k", linewidths=0.4)  # fmt: skip
+        ax.set_yticks(range(len(rows)), [r[0] for r in rows], fontsize=7)
+        ax.set_ylim(-0.7, len(rows) - 0.3)
+        ax.set_xscale("log")
+        ax.set_xlabel("u_p / c0")
+        ax.set_title(title if len(title) < 70 else title[:67] + "...", fontsize=9)
+        ax.grid(True, axis="x", alpha=0.3)
+    for k in range(len(panels), nrow * ncol):
+        grid[k // ncol, k % ncol].axis("off")
+    handles = [
+        plt.Line2D([], [], marker="o", ls="", color=color[s], markeredgecolor="k",
+                   label=s if s in OUTCOME_COLORS else f"{s} ({FAILURES.get(s, ('?',))[0]})")
+        for s in statuses if s in set(ds["status"].values) or s in OUTCOME_COLORS
+    ]  # fmt: skip
+    handles += [plt.Line2D([], [], marker=m, ls="", color="w", markeredgecolor="k", label=s)
+                for s, m in SCHEME_MARKERS.items()]  # fmt: skip
+    fig.legend(handles=handles, loc="upper center", ncol=min(len(handles), 6), fontsize=8)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.9 / (3.4 * nrow)))
+    fig.savefig(out, dpi=120)
+    plt.close(fig)

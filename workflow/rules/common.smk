@@ -44,6 +44,8 @@ def all_targets():
             if scheme != "piston"
             for u in config["scenes"][scene]["shock"]["u_p"]
         ]
+    if "campaign" in config:  # its dataset and figures (rule campaign)
+        out += list(campaign_outputs().values())
     return out
 
 

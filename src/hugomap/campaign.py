@@ -1,0 +1,513 @@
+"""The validation campaign (issue 5): variants of a few base scenes, their cost and error.
+
+A config's ``campaign`` block names *cases* (a base scene each) and, per case,
+
+- ``resolutions``: named sets of overrides (dotted keys, ``window.length: 30.0``) — each
+  becomes the scene ``<case>__<name>`` that runs the base's schemes at its piston velocities;
+- ``stability`` (optional): the map of where each scheme converges. Its strength axis is the
+  resolution variant it names (``resolution``): every scheme at every u_p of that scene.
+  Each further ``axes.<axis>`` sets one or more keys to a list of values (the first key's
+  value is the axis coordinate), each value becoming the scene ``<case>__<axis><i>`` that
+  runs the axis's ``schemes`` at ``stability.u_p`` (default: the base variant's).
+
+``expand_campaign`` turns the block into ordinary scenes before the config is validated, so
+the workflow runs them with its usual rules. ``campaign_dataset`` joins the scenes'
+aggregates (``results/hugoniot/<scene>.nc``) into one flat dataset (dim ``point``) of
+dimensionless figures, the cases having different units: the relative errors of D and P from
+the scene's reference Hugoniot at the point's u_p, u_p/c0, the CPU cost [s], the status and
+its failure class (``status.FAILURES``), the Pareto front of cost against each error.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+SEP = "__"  # <case>__<variant>: reserved in scene names of a config with a campaign
+DEFAULT_NAME = "validation"
+USABLE = ("ok", "not_converged")
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One scene of the campaign: which case, study and setting it is."""
+
+    scene: str  # the generated scene name
+    case: str
+    study: str  # "resolution" or "stability"
+    label: str  # the resolution's name, or the axis name and value index
+    axis: str = ""  # stability: the axis name ("" for the strength axis / resolutions)
+    keys: tuple[str, ...] = ()  # the dotted keys the axis sets
+    value: float = math.nan  # the axis coordinate: the first key's value
+    overrides: dict = field(default_factory=dict, compare=False, hash=False)
+
+
+class CampaignError(ValueError):
+    """A campaign block that cannot be expanded (the message names the key)."""
+
+
+def _set(scene: dict, dotted: str, value: Any, where: str) -> None:
+    """scene[a][b][c] = value for ``a.b.c`` (creating the blocks on the way)."""
+    parts = dotted.split(".")
+    if not all(parts):
+        raise CampaignError(f"{where}: {dotted!r} is not a dotted key like window.length")
+    node = scene
+    for p in parts[:-1]:
+        nxt = node.setdefault(p, {})
+        if not isinstance(nxt, dict):
+            raise CampaignError(f"{where}: {dotted!r}: {p} is not a block of the scene")
+        node = nxt
+    node[parts[-1]] = copy.deepcopy(value)
+
+
+def _get(scene: Mapping, dotted: str) -> Any:
+    node: Any = scene
+    for p in dotted.split("."):
+        if not isinstance(node, Mapping) or p not in node:
+            return None
+        node = node[p]
+    return node
+
+
+def _number(x: Any) -> float:
+    if isinstance(x, bool):
+        return math.nan
+    if isinstance(x, int | float):
+        return float(x)
+    if isinstance(x, list | tuple) and x and all(isinstance(v, int | float) for v in x):
+        return float(np.prod(x))  # e.g. cells [80, 4, 4]: the count
+    return math.nan
+
+
+def variants(campaign: Mapping) -> list[Variant]:
+    """The campaign's scenes, in a fixed order (cases, resolutions, then stability axes).
+
+    Raises CampaignError on a block that the schema would accept but cannot be expanded
+    (an axis whose value lists differ in length, a stability resolution that is not defined).
+    """
+    out: list[Variant] = []
+    for case, spec in campaign["cases"].items():
+        where = f"campaign.cases.{case}"
+        for label, over in spec["resolutions"].items():
+            out.append(Variant(f"{case}{SEP}{label}", case, "resolution", label,
+                               overrides=dict(over)))  # fmt: skip
+        st = spec.get("stability")
+        if not st:
+            continue
+        base = st["resolution"]
+        if base not in spec["resolutions"]:
+            raise CampaignError(
+                f"{where}.stability.resolution = {base!r}: not one of the resolutions "
+                f"({', '.join(spec['resolutions'])})"
+            )
+        for axis, ax in st.get("axes", {}).items():
+            keys = tuple(ax["set"])
+            lengths = {len(v) for v in ax["set"].values()}
+            if len(lengths) != 1:
+                raise CampaignError(
+                    f"{where}.stability.axes.{axis}.set: the value lists of "
+                    f"{', '.join(keys)} differ in length ({sorted(lengths)}); give one value "
+                    "per key for each point of the axis"
+                )
+            for i in range(lengths.pop()):
+                over = dict(spec["resolutions"][base])
+                over.update({k: ax["set"][k][i] for k in keys})
+                over["schemes"] = list(ax["schemes"])
+                if "u_p" in st:
+                    over["shock.u_p"] = list(st["u_p"])
+                out.append(Variant(
+                    f"{case}{SEP}{axis}{i + 1}", case, "stability", f"{axis}{i + 1}", axis,
+                    keys, _number(ax["set"][keys[0]][i]), over,
+                ))  # fmt: skip
+    return out
+
+
+def expand_campaign(cfg: dict) -> list[Variant]:
+    """Add the campaign's scenes to ``cfg["scenes"]`` (in place); return them.
+
+    A block the schema will refuse anyway (not a mapping, missing keys) is left alone and
+    nothing is added, so the schema's message names the key. A user scene whose name
+    contains ``__`` and is not one of the campaign's is refused (the separator is the
+    campaign's), and a generated scene replaces only its own earlier expansion.
+    """
+    from .config import ConfigError
+
+    camp = cfg.get("campaign") if isinstance(cfg, dict) else None
+    if not _well_formed(camp):
+        return []
+    try:
+        vs = variants(camp)
+    except CampaignError as exc:
+        raise ConfigError(f"invalid config:\n  {exc}") from None
+    scenes = cfg.setdefault("scenes", {})
+    if not isinstance(scenes, dict):
+        return []
+    names = {v.scene for v in vs}
+    clash = sorted(str(n) for n in scenes if SEP in str(n) and n not in names)
+    if clash:
+        raise ConfigError(
+            "invalid config:\n  "
+            + "\n  ".join(f"scenes.{n}: '{SEP}' in a scene name is reserved for the "
+                          "campaign's variants (<case>__<variant>)" for n in clash)
+        )  # fmt: skip
+    for v in vs:
+        scene = copy.deepcopy(camp["cases"][v.case]["scene"])
+        try:
+            for k, val in v.overrides.items():
+                _set(scene, k, val, f"campaign.cases.{v.case} ({v.study} {v.label})")
+        except CampaignError as exc:
+            raise ConfigError(f"invalid config:\n  {exc}") from None
+        scenes[v.scene] = scene
+    return vs
+
+
+def _well_formed(camp: Any) -> bool:
+    """Whether the block has the shape ``variants`` walks (the schema checks the rest)."""
+    if not isinstance(camp, dict) or not isinstance(camp.get("cases"), dict):
+        return False
+    for spec in camp["cases"].values():
+        if not isinstance(spec, dict) or not isinstance(spec.get("scene"), dict):
+            return False
+        res = spec.get("resolutions")
+        if not isinstance(res, dict) or not res:
+            return False
+        if not all(isinstance(o, dict) and all(isinstance(k, str) for k in o)
+                   for o in res.values()):  # fmt: skip
+            return False
+        st = spec.get("stability")
+        if st is None:
+            continue
+        if not isinstance(st, dict) or not isinstance(st.get("resolution"), str):
+            return False
+        if "u_p" in st and not isinstance(st["u_p"], list):
+            return False
+        axes = st.get("axes", {})
+        if not isinstance(axes, dict):
+            return False
+        for ax in axes.values():
+            if not (isinstance(ax, dict) and isinstance(ax.get("set"), dict) and ax["set"]
+                    and isinstance(ax.get("schemes"), list)
+                    and all(isinstance(k, str) and isinstance(v, list) and v
+                            for k, v in ax["set"].items())):  # fmt: skip
+                return False
+    return True
+
+
+def campaign_name(cfg: Mapping) -> str:
+    """The campaign's name (its files: ``results/campaign/<name>.nc``, ``…_*.png``)."""
+    return str(cfg.get("campaign", {}).get("name", DEFAULT_NAME))
+
+
+# -- the dataset ----------------------------------------------------------------------------
+
+
+def pareto_front(cost: np.ndarray, err: np.ndarray) -> np.ndarray:
+    """Mask of the points no other point beats in both cost and |err| (ties: the cheaper).
+
+    Sorted by cost, a point is on the front when its |err| is below that of every cheaper
+    point. Points with a non-finite cost or error are never on it."""
+    cost, err = np.asarray(cost, float), np.abs(np.asarray(err, float))
+    ok = np.isfinite(cost) & np.isfinite(err)
+    mask = np.zeros(cost.size, bool)
+    best = math.inf
+    for i in sorted(np.flatnonzero(ok), key=lambda j: (cost[j], err[j])):
+        if err[i] < best:
+            mask[i] = True
+            best = err[i]
+    return mask
+
+
+def _reference_curve(ds: xr.Dataset) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The reference Hugoniot of an aggregate, sorted by u_p: (u_p, {D, P, D_err, P_err})."""
+    if not all(f"ref_{k}" in ds for k in ("u_p", "D", "P")):
+        return np.empty(0), {}
+    u = ds["ref_u_p"].values.astype(float)
+    cols = {k: ds[f"ref_{k}"].values.astype(float) for k in ("D", "P")}
+    for k in ("D", "P"):
+        e = f"ref_{k}_err"
+        cols[k + "_err"] = ds[e].values.astype(float) if e in ds else np.zeros_like(u)
+    ok = np.isfinite(u) & (u > 0) & np.isfinite(cols["D"]) & np.isfinite(cols["P"])
+    order = np.argsort(u[ok])
+    return u[ok][order], {k: v[ok][order] for k, v in cols.items()}
+
+
+def _reference_name(ds: xr.Dataset) -> str:
+    """The reference model's name, from the aggregate's ``ref_D`` long name."""
+    text = str(ds["ref_D"].attrs.get("long_name", "")) if "ref_D" in ds else ""
+    return text.split(":")[0] if text else "none"
+
+
+def _interp(x: float, xs: np.ndarray, ys: np.ndarray) -> float:
+    """Linear interpolation, NaN outside [xs[0], xs[-1]] (no extrapolation)."""
+    if xs.size < 2 or not (xs[0] <= x <= xs[-1]):
+        return math.nan
+    return float(np.interp(x, xs, ys))
+
+
+def case_c0(ds: xr.Dataset, scene: Mapping) -> float:
+    """The sound speed that scales u_p: CSPH the EOS's c0 (the solid's, also for a porous
+    sample); MD the intercept of a straight-line fit D = c0 + s u_p to the reference
+    Hugoniot (``stats.linear_hugoniot_fit``), in the scene's own units."""
+    if scene.get("solver") == "csph":
+        return float(scene["material"]["eos"]["c0"])
+    from .analysis.stats import linear_hugoniot_fit
+
+    u, ref = _reference_curve(ds)
+    if u.size < 2:
+        return math.nan
+    return float(linear_hugoniot_fit(u, ref["D"], None).c0)
+
+
+def _knobs(scene: Mapping, c0: float) -> dict[str, float]:
+    """Dimensionless resolution of a scene: particles in the window at the upstream density
+    (MD: rho0 A L; CSPH: L/dx in 1D, L W/dx^2 in 2D), window length in particle spacings
+    (MD: rho0^(-1/3); CSPH: dx), and the average time in sound crossings of the window
+    (average_time c0 / L; NaN where a CSPH default is resolved per point)."""
+    w, s = scene.get("window", {}), scene["sample"]
+    L = float(w.get("length", math.nan))
+    if scene.get("solver") == "csph":
+        spacing = float(s["dx"])
+        across = float(s["width"]) / spacing if scene.get("dim") == 2 else 1.0
+    else:
+        a = (4.0 / float(s["rho0"])) ** (1.0 / 3.0)  # FCC lattice constant
+        spacing = float(s["rho0"]) ** (-1.0 / 3.0)
+        across = float(s["rho0"]) * s["cells"][1] * s["cells"][2] * a * a * spacing
+    avg = float(w.get("average_time", math.nan))
+    return {
+        "n_window": across * L / spacing,
+        "window_spacings": L / spacing,
+        "average_crossings": avg * c0 / L,
+    }
+
+
+def _axis_unit(solver: str, dotted: str) -> str:
+    """The unit of a scene key, from the ``[...]`` of its schema description ('1' if none)."""
+    import re
+
+    from .config import load_schema
+
+    node: Any = load_schema()["$defs"]["csph_scene" if solver == "csph" else "md_scene"]
+    for p in dotted.split("."):
+        node = node.get("properties", {}).get(p) if isinstance(node, dict) else None
+        if node is None:
+            return "?"
+    m = re.search(r"\[([^\]]+)\]", str(node.get("description", "")))
+    return m.group(1) if m else "1"
+
+
+POINT_COLUMNS: dict[str, tuple[str, str]] = {
+    "u_p_over_c0": ("1", "nominal piston velocity over the case's c0 (attrs cases)"),
+    "u_eval_over_c0": ("1", "u_p the error is taken at (MW: the amplitude it reached) over c0"),
+    "D_over_c0": ("1", "shock velocity over c0"),
+    "err_D": ("1", "relative error of D from the reference Hugoniot at u_eval: D/D_ref - 1"),
+    "err_D_err": ("1", "standard error of err_D (the point's and the reference's)"),
+    "err_P": ("1", "relative error of P from the reference Hugoniot at u_eval: P/P_ref - 1"),
+    "err_P_err": ("1", "standard error of err_P (the point's and the reference's)"),
+    "cpu_s": ("s", "CPU time of the point, every stage it needed (load, window, run), all threads"),
+    "wall_s": ("s", "wall-clock time of the point, every stage it needed"),
+    "n_window": ("1", "particles in the window at the upstream density (resolution)"),
+    "window_spacings": ("1", "window length in particle spacings (MD rho0^(-1/3), CSPH dx)"),
+    "average_crossings": ("1", "average time in sound crossings of the window, t c0 / L"),
+    "axis_value": ("1", "stability axis coordinate (its unit: axis_unit); NaN off an axis"),
+    "converged": ("1", "1 when the scheme reported a steady state within its tolerances"),
+}
+TEXT_COLUMNS = {
+    "case": "base scene of the campaign",
+    "study": "resolution (error and cost per setting) or stability (the map)",
+    "variant": "the resolution's name, or the stability axis and value index",
+    "scene": "the generated scene (results/<scene>/, results/hugoniot/<scene>.nc)",
+    "scheme": "piston, amw, mw or dichotomy",
+    "axis": "the stability axis ('' for resolutions and the strength axis)",
+    "axis_unit": "unit of axis_value",
+    "status": "ok, not_converged, or a failure status (hugomap.status.FAILURES)",
+    "failure_class": "FAILURES class of a failed point ('' if usable): e.g. control, dichotomy",
+    "cause": "FAILURES text of a failed point ('' if usable)",
+    "diagnostic": "the point's diagnostic",
+}
+
+
+def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.Dataset:
+    """One flat dataset (dim ``point``) from the aggregates of the campaign's scenes.
+
+    ``cfg``: the validated config (campaign expanded); ``aggregates``: scene → path of its
+    ``results/hugoniot/<scene>.nc``. Errors are relative to the reference Hugoniot stored in
+    the aggregate (``ref_*``: LJ the equilibrium-MD Hugoniot, solid copper D = c0 + s u_p,
+    porous copper McQueen's full compaction), interpolated linearly in u_p at the point's
+    u_p (MW: at ``u_p_set``, the amplitude it reached), NaN outside the reference's range.
+    A failed point keeps its status, failure class and cause, and no value.
+    """
+    import json
+
+    from .status import FAILURES
+
+    rows: list[dict[str, Any]] = []
+    cases: dict[str, dict] = {}
+    axes: dict[str, dict] = {}
+    for v in variants(cfg["campaign"]):
+        scene = cfg["scenes"][v.scene]
+        with xr.open_dataset(aggregates[v.scene], engine="netcdf4") as ds:
+            ds = ds.load()
+        c0 = case_c0(ds, scene)
+        ru, ref = _reference_curve(ds)
+        solver = scene.get("solver", "md")
+        cases.setdefault(v.case, {
+            "c0": c0, "units": "SI (m, s, kg)" if solver == "csph" else "LJ reduced",
+            "velocity_unit": str(ds["u_p"].attrs.get("units", "")),
+            "reference": _reference_name(ds),
+        })  # fmt: skip
+        st = cfg["campaign"]["cases"][v.case].get("stability")
+        if st:
+            cases[v.case]["stability_variant"] = st["resolution"]
+        if v.axis:
+            base = cfg["scenes"][f"{v.case}{SEP}{st['resolution']}"]
+            axes.setdefault(v.case, {})[v.axis] = {
+                "keys": list(v.keys), "unit": _axis_unit(solver, v.keys[0]),
+                "base": _number(_get(base, v.keys[0])),
+            }  # fmt: skip
+        knobs = _knobs(scene, c0)
+        for scheme in ds["scheme"].values:
+            p = ds.sel({"scheme": scheme})
+            for i, u in enumerate(p["u_p"].values.astype(float)):
+                status = str(p["status"].values[i])
+
+                def val(k: str, _p=p, _i=i) -> float:
+                    return float(_p[k].values[_i]) if k in _p else math.nan
+
+                u_eval = u
+                if scheme == "mw" and math.isfinite(val("u_p_set")):
+                    u_eval = val("u_p_set")
+                row: dict[str, Any] = {
+                    "case": v.case, "study": v.study, "variant": v.label, "scene": v.scene,
+                    "scheme": str(scheme), "axis": v.axis,
+                    "axis_unit": axes.get(v.case, {}).get(v.axis, {}).get("unit", ""),
+                    "axis_value": v.value, "status": status,
+                    "diagnostic": str(p["diagnostic"].values[i]),
+                    "u_p_over_c0": u / c0, "u_eval_over_c0": u_eval / c0,
+                    "cpu_s": val("cpu_s"), "wall_s": val("wall_s"),
+                    "converged": val("converged"), **knobs,
+                }  # fmt: skip
+                usable = status in USABLE
+                cls, cause = ("", "") if usable else FAILURES.get(status, ("?", "unregistered"))
+                row.update(failure_class=cls, cause=cause)
+                for q in ("D", "P"):
+                    x, xe = (val(q), val(q + "_err")) if usable else (math.nan, math.nan)
+                    xr_ = _interp(u_eval, ru, ref[q]) if ref else math.nan
+                    xre = _interp(u_eval, ru, ref[q + "_err"]) if ref else math.nan
+                    row[f"err_{q}"] = x / xr_ - 1.0
+                    xre = xre if math.isfinite(xre) else 0.0
+                    xe = xe if math.isfinite(xe) else math.nan
+                    row[f"err_{q}_err"] = math.hypot(xe / xr_, x * xre / xr_**2)
+                row["D_over_c0"] = (val("D") if usable else math.nan) / c0
+                rows.append(row)
+    if not rows:
+        raise ValueError("the campaign's aggregates hold no points")
+    n = len(rows)
+    data = {}
+    for k, (unit, long_name) in POINT_COLUMNS.items():
+        arr = np.array([r[k] for r in rows], dtype=float)
+        data[k] = ("point", arr, {"units": unit, "long_name": long_name})
+    for k, long_name in TEXT_COLUMNS.items():
+        data[k] = ("point", np.array([str(r[k]) for r in rows], dtype=object),
+                   {"long_name": long_name})  # fmt: skip
+    out = xr.Dataset(data, coords={"point": np.arange(n)})
+    out = out.set_coords(["case", "study", "variant", "scheme", "scene"])
+    out = out.merge(settings(out))
+    out.attrs.update(
+        title=f"hugomap validation campaign {campaign_name(cfg)}",
+        campaign=campaign_name(cfg),
+        cases=json.dumps(cases, sort_keys=True),
+        axes=json.dumps(axes, sort_keys=True),
+        campaign_config=json.dumps(cfg["campaign"], sort_keys=True),
+    )
+    return out
+
+
+SETTING_COLUMNS: dict[str, tuple[str, str]] = {
+    "setting_n_points": ("1", "points of the setting: its case's common piston velocities"),
+    "setting_n_usable": ("1", "of them ok or not_converged"),
+    "setting_cpu_s": ("s", "mean CPU time per point (failed points included)"),
+    "setting_err_D": ("1", "RMS relative error of D over the points; NaN if one failed"),
+    "setting_err_P": ("1", "RMS relative error of P over the points; NaN if one failed"),
+    "setting_n_window": ("1", "particles in the window at the upstream density"),
+    "setting_average_crossings": ("1", "average time in sound crossings of the window"),
+    "setting_pareto_D": ("1", "1 on the case's Pareto front of setting_cpu_s, setting_err_D"),
+    "setting_pareto_P": ("1", "1 on the case's Pareto front of setting_cpu_s, setting_err_P"),
+}
+
+
+def settings(points: xr.Dataset) -> xr.Dataset:
+    """The chart's markers (dim ``setting``): one per case, scheme and resolution, over the
+    piston velocities every resolution of the case ran (so that settings compare on the same
+    shocks): mean CPU per point, RMS relative errors, and the Pareto fronts per case.
+
+    The RMS counts every point: a setting with a failed point (or one outside the reference)
+    has no error and is not on a front."""
+    res = points.isel(point=np.flatnonzero(points["study"].values == "resolution"))
+    rows = []
+    for case in dict.fromkeys(res["case"].values):
+        c = res.isel(point=np.flatnonzero(res["case"].values == case))
+        by_variant = {
+            v: {round(float(u), 9) for u in c["u_p_over_c0"].values[c["variant"].values == v]}
+            for v in dict.fromkeys(c["variant"].values)
+        }
+        common = set.intersection(*by_variant.values())
+        for scheme in dict.fromkeys(c["scheme"].values):
+            for variant in by_variant:
+                sel = (c["scheme"].values == scheme) & (c["variant"].values == variant)
+                sel &= np.isin(np.round(c["u_p_over_c0"].values.astype(float), 9), list(common))
+                if not sel.any():
+                    continue
+                usable = np.isin(c["status"].values[sel], USABLE)
+                row = {"setting_case": case, "setting_scheme": scheme,
+                       "setting_variant": variant, "setting_n_points": float(sel.sum()),
+                       "setting_n_usable": float(usable.sum()),
+                       "setting_cpu_s": float(np.mean(c["cpu_s"].values[sel])),
+                       "setting_n_window": float(c["n_window"].values[sel][0]),
+                       "setting_average_crossings": float(
+                           c["average_crossings"].values[sel][0])}  # fmt: skip
+                for q in ("D", "P"):
+                    e = c[f"err_{q}"].values[sel].astype(float)
+                    row[f"setting_err_{q}"] = float(np.sqrt(np.mean(e**2)))  # NaN if any NaN
+                rows.append(row)
+    n = len(rows)
+    for q in ("D", "P"):
+        flags = np.zeros(n, np.int8)
+        for case in {r["setting_case"] for r in rows}:
+            idx = np.array([j for j, r in enumerate(rows) if r["setting_case"] == case], int)
+            m = pareto_front(np.array([rows[j]["setting_cpu_s"] for j in idx]),
+                             np.array([rows[j][f"setting_err_{q}"] for j in idx]))  # fmt: skip
+            flags[idx[m]] = 1
+        for j in range(n):
+            rows[j][f"setting_pareto_{q}"] = flags[j]
+    data = {
+        k: ("setting", np.array([r[k] for r in rows], dtype=np.int8 if "pareto" in k else float),
+            {"units": unit, "long_name": long_name})
+        for k, (unit, long_name) in SETTING_COLUMNS.items()
+    }  # fmt: skip
+    for k in ("setting_case", "setting_scheme", "setting_variant"):
+        data[k] = ("setting", np.array([r[k] for r in rows], dtype=object),
+                   {"long_name": k.split("_", 1)[1] + " of the setting"})  # fmt: skip
+    return xr.Dataset(data).set_coords(["setting_case", "setting_scheme", "setting_variant"])
+
+
+def write_campaign(
+    cfg: Mapping, aggregates: Sequence[str | Path], out: str | Path
+) -> Path:
+    """Build the campaign dataset from aggregate files (named ``<scene>.nc``) and write it."""
+    from .io.atomic import write_netcdf
+    from .io.dataset import provenance_attrs
+
+    by_scene = {Path(a).stem: a for a in aggregates}
+    missing = [v.scene for v in variants(cfg["campaign"]) if v.scene not in by_scene]
+    if missing:
+        raise ValueError(f"campaign: no aggregate for scene(s) {', '.join(missing)}")
+    ds = campaign_dataset(cfg, by_scene)
+    ds.attrs.update(provenance_attrs(dict(cfg)))
+    return write_netcdf(ds, out)

@@ -1,0 +1,215 @@
+"""The validation campaign's expansion, dataset, Pareto fronts and figures (hugomap.campaign).
+
+References: the expansion is checked against the overrides written in the test; the
+dataset's errors against the reference line the synthetic aggregates are built from (a point
+at D = 1.02 D_ref has err_D = 0.02 exactly, to rounding); the RMS of a setting and the Pareto
+fronts against values worked out by hand; the failure labels against ``status.FAILURES``.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from hugomap import campaign as cp
+from hugomap.cli import main
+from hugomap.config import ConfigError, validate_config
+from hugomap.io.atomic import write_netcdf
+from hugomap.io.dataset import point_dataset
+from hugomap.pipeline import aggregate
+from hugomap.status import FAILURES
+
+C0, S = 3940.0, 1.49
+
+
+def _base() -> dict:
+    return {
+        "solver": "csph", "dim": 1, "schemes": ["piston", "amw"],
+        "material": {"strength": {"model": "none"}},
+        "sample": {"length": 4e-3, "dx": 1e-5},
+        "shock": {"u_p": [500.0, 1000.0], "load_fraction": 0.5},
+        "window": {"length": 1.5e-3, "front_fraction": 0.6, "window_time": 1e-6,
+                   "average_time": 4e-6},
+    }  # fmt: skip
+
+
+def _config() -> dict:
+    return {
+        "campaign": {
+            "name": "demo",
+            "cases": {
+                "cu": {
+                    "scene": _base(),
+                    "resolutions": {"coarse": {"sample.dx": 2e-5}, "mid": {}},
+                    "stability": {
+                        "resolution": "mid",
+                        "u_p": [100.0, 1000.0],
+                        "axes": {
+                            "beta": {"schemes": ["amw"], "set": {"window.amw.beta": [0.2, 2.5]}}
+                        },
+                    },
+                }
+            },
+        }
+    }
+
+
+def test_expansion_makes_one_scene_per_variant():
+    cfg = validate_config(_config())
+    assert list(cfg["scenes"]) == ["cu__coarse", "cu__mid", "cu__beta1", "cu__beta2"]
+    sc = cfg["scenes"]
+    assert sc["cu__coarse"]["sample"]["dx"] == 2e-5 and sc["cu__mid"]["sample"]["dx"] == 1e-5
+    assert sc["cu__beta2"]["window"]["amw"]["beta"] == 2.5
+    assert sc["cu__beta2"]["schemes"] == ["amw"]
+    assert sc["cu__beta2"]["shock"]["u_p"] == [100.0, 1000.0]
+    assert sc["cu__mid"]["shock"]["u_p"] == [500.0, 1000.0]
+    # defaults are filled per variant (CSPH: proportional to its own dx)
+    assert sc["cu__coarse"]["shock"]["bin_width"] == pytest.approx(4e-5)
+    assert sc["cu__mid"]["shock"]["bin_width"] == pytest.approx(2e-5)
+    # validating again (Snakemake, then a stage) changes nothing
+    again = validate_config(copy.deepcopy(cfg))
+    assert again == cfg
+    vs = cp.variants(cfg["campaign"])
+    assert [(v.study, v.axis, v.value) for v in vs][2:] == [
+        ("stability", "beta", 0.2),
+        ("stability", "beta", 2.5),
+    ]
+
+
+@pytest.mark.parametrize(
+    ("change", "needle"),
+    [
+        (lambda c: c["resolutions"]["coarse"].update({"window.lenth": 1e-3}),
+         "scenes.cu__coarse.window: unknown key(s) ['lenth']"),
+        (lambda c: c["resolutions"]["coarse"].update({"sample.dx": -1.0}),
+         "[scene made by campaign.cases.cu, resolution coarse]"),
+        (lambda c: c["stability"]["axes"]["beta"]["set"].update({"window.z": [1.0]}),
+         "campaign.cases.cu.stability.axes.beta.set: the value lists"),
+        (lambda c: c["stability"].update({"resolution": "fine"}),
+         "campaign.cases.cu.stability.resolution = 'fine': not one of the resolutions"),
+        (lambda c: c["stability"]["axes"]["beta"]["set"].update({"window.amw.beta": [4.0, 0.5]}),
+         "scenes.cu__beta1.window.amw.beta = 4.0: out of range"),
+        (lambda c: c["resolutions"].update({"a_b": {}}), "campaign.cases.cu.resolutions"),
+    ],
+)  # fmt: skip
+def test_bad_campaign_is_refused_naming_the_key(change, needle):
+    cfg = _config()
+    change(cfg["campaign"]["cases"]["cu"])
+    with pytest.raises(ConfigError) as e:
+        validate_config(cfg)
+    assert needle in str(e.value)
+
+
+def test_user_scene_with_the_separator_is_refused():
+    cfg = _config()
+    cfg["scenes"] = {"my__scene": _base()}
+    with pytest.raises(ConfigError, match="my__scene: '__' in a scene name is reserved"):
+        validate_config(cfg)
+
+
+def test_pareto_front():
+    cost = np.array([1.0, 2.0, 3.0, 4.0, 5.0, np.nan, 0.5])
+    err = np.array([0.10, 0.20, 0.05, 0.05, 0.01, 0.0, np.nan])
+    # 1 s at 10 % is the cheapest; 2 s is beaten by it; 3 s improves; 4 s ties (not better);
+    # 5 s improves; NaN cost or error is never on the front
+    assert cp.pareto_front(cost, err).tolist() == [True, False, True, False, True, False, False]
+    assert cp.pareto_front(np.array([1.0, 1.0]), np.array([-0.2, 0.1])).tolist() == [False, True]
+
+
+def _aggregates(tmp_path: Path, cfg: dict, outcome) -> list[Path]:
+    """Aggregates of every campaign scene from synthetic point files: D = D_ref (1 + e) with
+    e and the status from ``outcome(scene, scheme, u)``; the reference D = c0 + s u_p."""
+    ups = np.linspace(50.0, 1500.0, 30)
+    ref = xr.Dataset({
+        "u_p": ("point", ups), "D": ("point", C0 + S * ups),
+        "P": ("point", 8930.0 * (C0 + S * ups) * ups), "V": ("point", np.ones(30)),
+    })  # fmt: skip
+    ref_path = tmp_path / "reference.nc"
+    write_netcdf(ref, ref_path)
+    out = []
+    for name, scene in cfg["scenes"].items():
+        files = []
+        for scheme in scene["schemes"]:
+            for u in scene["shock"]["u_p"]:
+                e, status, cpu = outcome(name, scheme, u)
+                D = (C0 + S * u) * (1 + e)
+                values = {"piston_velocity": u, "cpu_s": cpu, "wall_s": cpu, "u_p_set": u}
+                if status in cp.USABLE:
+                    values.update(D=D, D_err=0.001 * D, P=8930.0 * D * u, P_err=1e3,
+                                  converged=status == "ok")  # fmt: skip
+                f = tmp_path / name / f"{scheme}_{u:g}.nc"
+                f.parent.mkdir(exist_ok=True)
+                ds = point_dataset(values, {"rho0": 8930.0}, None, scheme, name, status,
+                                   "synthetic" if status not in cp.USABLE else "", scene)  # fmt: skip
+                write_netcdf(ds, f)
+                files.append(str(f))
+        out.append(aggregate(files, str(ref_path), cfg, name, tmp_path / f"{name}.nc"))
+    return out
+
+
+def _outcome(name: str, scheme: str, u: float) -> tuple[float, str, float]:
+    if name == "cu__beta2":
+        return 0.0, "diverged" if u > 500 else "oscillating", 5.0
+    if name == "cu__coarse" and scheme == "amw" and u == 500.0:
+        return 0.0, "too_noisy", 2.0
+    e = {"cu__coarse": 0.02, "cu__mid": 0.01}.get(name, 0.005)
+    return (-e if scheme == "piston" else 1.5 * e), "ok", {"piston": 1.0, "amw": 3.0}[scheme] * (
+        2.0 if name == "cu__mid" else 1.0
+    )
+
+
+def test_dataset_errors_labels_and_settings(tmp_path):
+    cfg = validate_config(_config())
+    aggs = _aggregates(tmp_path, cfg, _outcome)
+    ds = cp.campaign_dataset(cfg, {Path(a).stem: a for a in aggs})
+    assert ds.sizes["point"] == 2 * 2 + 2 * 2 + 2 + 2
+    pts = ds.to_dataframe().reset_index()
+    row = pts[(pts.scene == "cu__mid") & (pts.scheme == "piston") & (pts.u_p_over_c0 > 0.2)]
+    assert float(row.err_D.iloc[0]) == pytest.approx(-0.01, abs=1e-12)
+    assert float(row.err_P.iloc[0]) == pytest.approx(-0.01, abs=1e-12)
+    assert float(row.u_p_over_c0.iloc[0]) == pytest.approx(1000.0 / C0)
+    # failed points: labelled by their FAILURES class and cause, and no value
+    bad = pts[pts.status != "ok"]
+    assert set(bad.status) == {"diverged", "oscillating", "too_noisy"}
+    for _, r in bad.iterrows():
+        assert (r.failure_class, r.cause) == FAILURES[r.status]
+        assert math.isnan(r.err_D) and math.isnan(r.err_P) and math.isnan(r.D_over_c0)
+    assert (pts[pts.status == "ok"].failure_class == "").all()
+    # the stability rows carry the axis and its unit
+    b = pts[pts.axis == "beta"]
+    assert sorted(set(b.axis_value)) == [0.2, 2.5] and set(b.axis_unit) == {"1"}
+    assert json.loads(ds.attrs["axes"])["cu"]["beta"]["base"] == 0.5
+    # settings: the resolutions' common u_p (500, 1000); coarse amw failed at 500 -> no error
+    st = ds[[k for k in ds.data_vars if k.startswith("setting_")]].to_dataframe()
+    st = st.reset_index().set_index(["setting_scheme", "setting_variant"])
+    assert st.loc[("amw", "coarse"), "setting_n_usable"] == 1
+    assert math.isnan(st.loc[("amw", "coarse"), "setting_err_D"])
+    assert st.loc[("piston", "coarse"), "setting_err_D"] == pytest.approx(0.02, abs=1e-12)
+    assert st.loc[("amw", "mid"), "setting_cpu_s"] == pytest.approx(6.0)
+    # Pareto in D: piston coarse (1 s, 2 %), piston mid (2 s, 1 %), amw mid (6 s, 1.5 %:
+    # beaten) -> the two pistons; amw coarse has no error
+    front = st[st.setting_pareto_D == 1].index.tolist()
+    assert sorted(front) == [("piston", "coarse"), ("piston", "mid")]
+
+
+def test_cli_writes_dataset_chart_and_map(tmp_path):
+    cfg = validate_config(_config())
+    aggs = _aggregates(tmp_path, cfg, _outcome)
+    out = tmp_path / "campaign" / "demo.nc"
+    chart, smap = tmp_path / "chart.png", tmp_path / "map.png"
+    rc = main(["campaign", "--config-json", json.dumps(_config()), "--out", str(out),
+               "--chart", str(chart), "--map", str(smap), *map(str, aggs)])  # fmt: skip
+    assert rc == 0
+    ds = xr.load_dataset(out)
+    assert ds.attrs["campaign"] == "demo" and ds["cpu_s"].attrs["units"] == "s"
+    for png in (chart, smap):
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+    with pytest.raises(ValueError, match="no aggregate for scene"):
+        main(["campaign", "--config-json", json.dumps(_config()), "--out", str(out),
+              "--chart", str(chart), "--map", str(smap), *map(str, aggs[:-1])])  # fmt: skip

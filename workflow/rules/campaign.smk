@@ -1,0 +1,46 @@
+# The validation campaign (config key `campaign`, hugomap.campaign): its variants are
+# ordinary scenes (expanded before validation); this rule joins their aggregates into one
+# dataset and draws the speed-accuracy chart and the stability map. Target: `campaign`.
+
+
+def campaign_aggregates(wildcards):
+    """The aggregates of every scene the campaign made."""
+    from hugomap.campaign import variants
+
+    if "campaign" not in config:
+        raise WorkflowError(
+            "this config has no campaign block: give --configfile config/campaign.yaml"
+        )
+    return [f"{RES}/hugoniot/{v.scene}.nc" for v in variants(config["campaign"])]
+
+
+def campaign_outputs():
+    name = config.get("campaign", {}).get("name", "validation")
+    return {
+        "nc": f"{RES}/campaign/{name}.nc",
+        "chart": f"{RES}/campaign/{name}_speed_accuracy.png",
+        "map": f"{RES}/campaign/{name}_stability.png",
+    }
+
+
+rule campaign:
+    input:
+        campaign_aggregates,
+    output:
+        **campaign_outputs(),
+    log:
+        f"{RES}/logs/campaign.log",
+    conda:
+        "../envs/hugomap.yaml"
+    threads: 1
+    resources:
+        mem_mb=2048,
+        runtime=10,
+    params:
+        py=PY,
+        config=lambda wildcards: json.dumps(
+            {k: v for k, v in config.items() if k != "scenes"}, sort_keys=True
+        ),
+    shell:
+        "{params.py} -m hugomap campaign --config-json {params.config:q} --out {output.nc}"
+        " --chart {output.chart} --map {output.map} {input} > {log} 2>&1"
