@@ -199,3 +199,74 @@ for name, ds in scenes.items():
 failures = pd.DataFrame(fails, columns=["scene", "scheme", "u_p", "status", "stage", "cause",
                                         "diagnostic"])  # fmt: skip
 failures
+
+# %% [markdown]
+# ## The validation campaign
+# `snakemake --cores 2 campaign --configfile config/campaign.yaml` runs every scheme at
+# several resolutions on the campaign's cases and writes `results/campaign/<name>.nc`: a row
+# per point (dim `point`: relative errors of D and P from the case's reference at the
+# point's u_p, CPU seconds, status and failure class) and a marker per case, scheme and
+# resolution (dim `setting`: mean CPU per point and RMS errors over the piston velocities all
+# resolutions ran, the Pareto fronts). Redrawn here: the speed–accuracy chart, the stability
+# map, the fronts as a table, the cheapest setting of each scheme that reaches an accuracy,
+# and the failures by cause.
+
+# %%
+from IPython.display import Image, display  # noqa: E402
+
+from hugomap.figures import speed_accuracy_figure, stability_map_figure  # noqa: E402
+
+campaigns = {f.stem: xr.open_dataset(f, chunks={}).compute()
+             for f in sorted((RESULTS / "campaign").glob("*.nc"))}  # fmt: skip
+print(f"{len(campaigns)} campaign(s):", list(campaigns))
+settings, camp_points = {}, {}
+for name, cds in campaigns.items():
+    speed_accuracy_figure(cds, FIGURES / f"{name}_speed_accuracy.png")
+    stability_map_figure(cds, FIGURES / f"{name}_stability.png")
+    display(Image(filename=str(FIGURES / f"{name}_speed_accuracy.png")))
+    display(Image(filename=str(FIGURES / f"{name}_stability.png")))
+    setting_vars = [k for k in cds.data_vars if k.startswith("setting_")]
+    settings[name] = cds[setting_vars].to_dataframe().reset_index(drop=True)
+    camp_points[name] = cds.drop_vars(setting_vars).to_dataframe().reset_index()
+
+# %% [markdown]
+# The Pareto fronts: no other setting of the case is both cheaper and more accurate.
+
+# %%
+fronts = pd.concat(
+    [s[(s.setting_pareto_P == 1) | (s.setting_pareto_D == 1)].assign(campaign=n)
+     for n, s in settings.items()] or [pd.DataFrame()], ignore_index=True,
+)  # fmt: skip
+fronts
+
+# %% [markdown]
+# The source's claim that AMW converges faster than MW: the cheapest setting of each scheme
+# whose RMS error of D (of P) stays within 1, 2 and 5 % (NaN: no setting of that scheme got
+# there), in mean CPU seconds per point.
+
+# %%
+rows = []
+for name, s in settings.items():
+    for case, g in s.groupby("setting_case"):
+        for q in ("D", "P"):
+            for tol in (0.01, 0.02, 0.05):
+                row = {"campaign": name, "case": case, "error": q, "within": tol}
+                for scheme, h in g.groupby("setting_scheme"):
+                    ok = h[h[f"setting_err_{q}"].abs() <= tol]
+                    row[scheme] = ok["setting_cpu_s"].min() if len(ok) else np.nan
+                rows.append(row)
+cheapest = pd.DataFrame(rows)
+cheapest
+
+# %% [markdown]
+# Outcomes by cause, per case and scheme (the stability map's colours, counted).
+
+# %%
+outcomes = pd.concat(
+    [p.assign(campaign=n) for n, p in camp_points.items()] or [pd.DataFrame()],
+    ignore_index=True,
+)
+if len(outcomes):
+    outcomes = (outcomes.groupby(["campaign", "case", "scheme", "status", "failure_class"])
+                .size().rename("points").reset_index())  # fmt: skip
+outcomes

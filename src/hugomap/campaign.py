@@ -497,9 +497,7 @@ def settings(points: xr.Dataset) -> xr.Dataset:
     return xr.Dataset(data).set_coords(["setting_case", "setting_scheme", "setting_variant"])
 
 
-def write_campaign(
-    cfg: Mapping, aggregates: Sequence[str | Path], out: str | Path
-) -> Path:
+def write_campaign(cfg: Mapping, aggregates: Sequence[str | Path], out: str | Path) -> Path:
     """Build the campaign dataset from aggregate files (named ``<scene>.nc``) and write it."""
     from .io.atomic import write_netcdf
     from .io.dataset import provenance_attrs

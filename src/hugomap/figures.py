@@ -264,7 +264,7 @@ def stability_map_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
                     rows.append((f"{s} {tag}", m))
             unit = meta["unit"]
             title = f"{case}: {' + '.join(meta['keys'])}" + (f" [{unit}]" if unit != "1" else "")
-        for y, (label, m) in enumerate(rows):
+        for y, (_, m) in enumerate(rows):
             for i in np.flatnonzero(m):
                 st = str(ds["status"].values[i])
                 ax.scatter(x_all[i], y, marker=SCHEME_MARKERS.get(str(scheme_v[i]), "x"),

@@ -159,8 +159,10 @@ def _outcome(name: str, scheme: str, u: float) -> tuple[float, str, float]:
     if name == "cu__coarse" and scheme == "amw" and u == 500.0:
         return 0.0, "too_noisy", 2.0
     e = {"cu__coarse": 0.02, "cu__mid": 0.01}.get(name, 0.005)
-    return (-e if scheme == "piston" else 1.5 * e), "ok", {"piston": 1.0, "amw": 3.0}[scheme] * (
-        2.0 if name == "cu__mid" else 1.0
+    return (
+        (-e if scheme == "piston" else 1.5 * e),
+        "ok",
+        {"piston": 1.0, "amw": 3.0}[scheme] * (2.0 if name == "cu__mid" else 1.0),
     )
 
 

@@ -31,12 +31,19 @@ def point_files(wildcards):
 
 def all_targets():
     out = []
+    made = set()  # the campaign's scenes: their history figures only on request
+    if "campaign" in config:
+        from hugomap.campaign import variants
+
+        made = {v.scene for v in variants(config["campaign"])}
     for scene in config["scenes"]:
         out += [
             f"{RES}/hugoniot/{scene}.nc",
             f"{RES}/figures/{scene}_PV.png",
             f"{RES}/figures/{scene}_D_up.png",
         ]
+        if scene in made:
+            continue
         schemes = config["scenes"][scene].get("schemes", config["schemes"])
         out += [
             f"{RES}/figures/{scene}/up{up_tag(u)}_{scheme}_history.png"
