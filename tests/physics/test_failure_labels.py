@@ -145,9 +145,7 @@ def test_every_failure_is_labelled_and_has_no_value(windows, tmp_path):
     for i in range(ds.sizes["point"]):
         status = str(ds["status"].values[i])
         assert status.replace("_", "") == str(ds["variant"].values[i])
-        assert (str(ds["failure_class"].values[i]), str(ds["cause"].values[i])) == FAILURES[
-            status
-        ]
+        assert (str(ds["failure_class"].values[i]), str(ds["cause"].values[i])) == FAILURES[status]
         assert math.isnan(float(ds["err_D"].values[i])) and math.isnan(float(ds["err_P"][i]))
     assert np.isnan(ds["setting_err_D"].values).all()
     assert not ds["setting_pareto_D"].values.any()
