@@ -30,6 +30,14 @@ def snakemake(workdir: Path, *args: str, config: Path = TINY) -> subprocess.Comp
     return subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=workdir, timeout=1500)
 
 
+def test_dry_run_before_any_job(tmp_path: Path) -> None:
+    """``snakemake -n`` in an empty folder lists the jobs and exits 0, the dichotomy's loop
+    included (its point's command is formatted before the loop's states exist)."""
+    r = snakemake(tmp_path, "-n")
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert "dichotomy_point" in r.stdout and "Exception" not in r.stdout + r.stderr
+
+
 @pytest.mark.slow
 def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
     r = snakemake(tmp_path)

@@ -106,7 +106,14 @@ rule dichotomy_point:
     params:
         py=PY,
         scene=scene_json,
+        # from params, not {input.*}: a dry run (-n) formats this command before the loop's
+        # states exist, when the input function could not yet name them
+        window=lambda w: f"{RES}/{w.scene}/up{w.up}/window.nc",
+        state=lambda w, input: input.state if "state" in input.keys() else "",
+        trials=lambda w, input: (
+            " ".join(input.trials) if "trials" in input.keys() else ""
+        ),
     shell:
         "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap dichotomy-point"
-        " --scene-name {wildcards.scene} --scene-json {params.scene:q} --window {input.window}"
-        " --u-p {wildcards.up} --state {input.state} --out {output} {input.trials} > {log} 2>&1"
+        " --scene-name {wildcards.scene} --scene-json {params.scene:q} --window {params.window}"
+        " --u-p {wildcards.up} --state {params.state} --out {output} {params.trials} > {log} 2>&1"
