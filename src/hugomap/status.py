@@ -42,7 +42,7 @@ from .config import load_config, point_tag
 
 DONE_STATES = ("ok", "not_converged")
 STATES = ("ok", "not_converged", "failed", "running", "pending")
-RESERVED = ("hugoniot", "figures", "logs")
+RESERVED = ("hugoniot", "figures", "logs", "campaign")
 PART_SUFFIX = ".part.nc"
 SCHEMES = ("piston", "amw", "mw", "dichotomy")  # every scheme the workflow knows
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")  # those that start from the window checkpoint
