@@ -262,7 +262,7 @@ def case_c0(ds: xr.Dataset, scene: Mapping) -> float:
     u, ref = _reference_curve(ds)
     if u.size < 2:
         return math.nan
-    return float(linear_hugoniot_fit(u, ref["D"], None).c0)
+    return float(linear_hugoniot_fit(u, ref["D"], ref["D_err"])["c0"])
 
 
 def _knobs(scene: Mapping, c0: float) -> dict[str, float]:

@@ -122,6 +122,17 @@ def test_pareto_front():
     assert cp.pareto_front(np.array([1.0, 1.0]), np.array([-0.2, 0.1])).tolist() == [False, True]
 
 
+def test_md_c0_is_the_reference_line_intercept():
+    """MD: c0 is the intercept of the line fit to the reference Hugoniot (points on
+    D = 7.2 + 1.6 u_p give 7.2 to rounding); CSPH: the EOS's c0."""
+    u = np.array([0.3, 0.8, 1.5, 2.5])
+    ds = xr.Dataset({"ref_u_p": ("ref_point", u), "ref_D": ("ref_point", 7.2 + 1.6 * u),
+                     "ref_P": ("ref_point", u), "ref_D_err": ("ref_point", 0.01 + 0 * u)})  # fmt: skip
+    assert cp.case_c0(ds, {"solver": "md"}) == pytest.approx(7.2, abs=1e-9)
+    assert cp.case_c0(ds, {"solver": "csph", "material": {"eos": {"c0": C0}}}) == C0
+    assert math.isnan(cp.case_c0(xr.Dataset(), {"solver": "md"}))
+
+
 def _aggregates(tmp_path: Path, cfg: dict, outcome) -> list[Path]:
     """Aggregates of every campaign scene from synthetic point files: D = D_ref (1 + e) with
     e and the status from ``outcome(scene, scheme, u)``; the reference D = c0 + s u_p."""
