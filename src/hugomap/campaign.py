@@ -15,7 +15,9 @@ the workflow runs them with its usual rules. ``campaign_dataset`` joins the scen
 aggregates (``results/hugoniot/<scene>.nc``) into one flat dataset (dim ``point``) of
 dimensionless figures, the cases having different units: the relative errors of D and P from
 the scene's reference Hugoniot at the point's u_p, u_p/c0, the CPU cost [s], the status and
-its failure class (``status.FAILURES``), the Pareto front of cost against each error.
+its failure class (``status.FAILURES``); and the chart's markers (dim ``setting``: a case,
+scheme and resolution over the piston velocities all its resolutions ran) with the Pareto
+fronts of cost against each error.
 """
 
 from __future__ import annotations
@@ -57,12 +59,16 @@ def _set(scene: dict, dotted: str, value: Any, where: str) -> None:
     """scene[a][b][c] = value for ``a.b.c`` (creating the blocks on the way)."""
     parts = dotted.split(".")
     if not all(parts):
-        raise CampaignError(f"{where}: {dotted!r} is not a dotted key like window.length")
+        raise CampaignError(f"{where}: key {dotted!r} is not a dotted key like window.length")
     node = scene
-    for p in parts[:-1]:
+    for i, p in enumerate(parts[:-1]):
         nxt = node.setdefault(p, {})
         if not isinstance(nxt, dict):
-            raise CampaignError(f"{where}: {dotted!r}: {p} is not a block of the scene")
+            block = ".".join(parts[: i + 1])
+            raise CampaignError(
+                f"{where}: key {dotted!r} cannot be set: the base scene's {block} is not a "
+                "block of keys"
+            )
         node = nxt
     node[parts[-1]] = copy.deepcopy(value)
 
@@ -161,11 +167,26 @@ def expand_campaign(cfg: dict) -> list[Variant]:
         scene = copy.deepcopy(camp["cases"][v.case]["scene"])
         try:
             for k, val in v.overrides.items():
-                _set(scene, k, val, f"campaign.cases.{v.case} ({v.study} {v.label})")
+                _set(scene, k, val, _origin(camp, v, k))
         except CampaignError as exc:
             raise ConfigError(f"invalid config:\n  {exc}") from None
         scenes[v.scene] = scene
     return vs
+
+
+def _origin(camp: Mapping, v: Variant, key: str) -> str:
+    """The campaign key path an override of variant ``v`` comes from (for messages)."""
+    case = f"campaign.cases.{v.case}"
+    if v.study == "resolution":
+        return f"{case}.resolutions.{v.label}"
+    st = camp["cases"][v.case]["stability"]
+    if key in v.keys:
+        return f"{case}.stability.axes.{v.axis}.set"
+    if key == "shock.u_p" and "u_p" in st:
+        return f"{case}.stability.u_p"
+    if key == "schemes":
+        return f"{case}.stability.axes.{v.axis}.schemes"
+    return f"{case}.resolutions.{st['resolution']}"
 
 
 def _well_formed(camp: Any) -> bool:

@@ -487,7 +487,12 @@ def validate_config(cfg: Any, schema: dict | None = None) -> dict:
         if not problems:
             from .campaign import expand_campaign
 
-            generated = expand_campaign(cfg)  # the campaign's variants become scenes
+            try:
+                generated = expand_campaign(cfg)  # the campaign's variants become scenes
+            except RecursionError:
+                raise ConfigError(
+                    "invalid config:\n  campaign: nested too deeply (a recursive YAML anchor?)"
+                ) from None
     if not problems:
         schema = schema or load_schema()
         try:

@@ -49,6 +49,7 @@ BASES = {
     "default": yaml.safe_load((ROOT / "config/config.yaml").read_text()),
     "tiny": yaml.safe_load((ROOT / "tests/workflow/tiny/config.yaml").read_text()),
 }
+CAMPAIGN = yaml.safe_load((ROOT / "config/campaign.yaml").read_text())
 # 150 fixed examples per property in the suite (about 20 s); HUGOMAP_FUZZ_EXAMPLES=N runs N
 # random ones instead, for a deeper search.
 DEEP = os.environ.get("HUGOMAP_FUZZ_EXAMPLES")
@@ -185,7 +186,9 @@ def check(cfg: object, mutations: list[tuple] | None = None) -> str:
         assert isinstance(name, str) and name.isidentifier()
         tags = [point_tag(u) for u in scene["shock"]["u_p"]]
         assert len(set(tags)) == len(tags)
-        assert scene["sample"]["rho0"] > 0 and all(u > 0 for u in scene["shock"]["u_p"])
+        rho0 = scene["material"]["eos"]["rho0"] if scene["solver"] == "csph" else None
+        rho0 = scene["sample"]["rho0"] if rho0 is None else rho0
+        assert rho0 > 0 and all(u > 0 for u in scene["shock"]["u_p"])
     # Validation is idempotent: a resolved config validates to itself.
     again = copy.deepcopy(out)
     assert validate_config(again) == out
@@ -204,10 +207,19 @@ def _get(cfg: object, path: tuple) -> object:
 @st.composite
 def mutated_configs(draw: st.DrawFn) -> tuple[dict, list[tuple]]:
     """A shipped config with one to three mutations; returns it and the mutated key paths."""
-    cfg = copy.deepcopy(BASES[draw(st.sampled_from(sorted(BASES)))])
+    return _mutate(draw, copy.deepcopy(BASES[draw(st.sampled_from(sorted(BASES)))]), ())
+
+
+@st.composite
+def mutated_campaigns(draw: st.DrawFn) -> tuple[dict, list[tuple]]:
+    """config/campaign.yaml with one to three mutations inside its campaign block."""
+    return _mutate(draw, copy.deepcopy(CAMPAIGN), ("campaign",))
+
+
+def _mutate(draw: st.DrawFn, cfg: dict, under: tuple) -> tuple[dict, list[tuple]]:
     mutations: list[tuple] = []
     for _ in range(draw(st.integers(1, 3))):
-        paths = sorted((p for p in _all_paths(cfg) if p), key=key_path)
+        paths = sorted((p for p in _all_paths(cfg) if p and p[: len(under)] == under), key=key_path)
         if not paths:
             break
         path = draw(st.sampled_from(paths))
@@ -333,6 +345,15 @@ schema_configs = st.booleans().flatmap(_configs)
 
 
 # -- the properties -----------------------------------------------------------------------
+
+
+@settings(FUZZ, max_examples=int(DEEP or 60))
+@given(mutated_campaigns())
+def test_mutated_campaigns_are_accepted_or_refused_by_key(case: tuple[dict, list[tuple]]) -> None:
+    """A campaign block with bad values expands (or not) and is accepted or refused with a
+    ConfigError whose every line names a key path: of the config, or of a scene the
+    campaign made (``scenes.<case>__<variant>...``, tagged with the campaign key)."""
+    check(case[0])
 
 
 @FUZZ
