@@ -205,3 +205,24 @@ def dichotomy_final(w):
                 }
         trials += dichotomy_trials(w, k)
         k += 1
+
+
+def campaign_aggregates(wildcards):
+    """The aggregates of every scene the campaign made."""
+    from hugomap.campaign import variants
+
+    if "campaign" not in config:
+        raise WorkflowError(
+            "this config has no campaign block: give --configfile config/campaign.yaml"
+        )
+    return [f"{RES}/hugoniot/{v.scene}.nc" for v in variants(config["campaign"])]
+
+
+def campaign_outputs():
+    """The campaign dataset and its two figures, named by campaign.name."""
+    name = config.get("campaign", {}).get("name", "validation")
+    return {
+        "nc": f"{RES}/campaign/{name}.nc",
+        "chart": f"{RES}/campaign/{name}_speed_accuracy.png",
+        "map": f"{RES}/campaign/{name}_stability.png",
+    }
