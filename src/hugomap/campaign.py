@@ -388,10 +388,14 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
             cases[v.case]["stability_variant"] = st["resolution"]
         if v.axis:
             base = cfg["scenes"][f"{v.case}{SEP}{st['resolution']}"]
-            axes.setdefault(v.case, {})[v.axis] = {
+            meta = axes.setdefault(v.case, {}).setdefault(v.axis, {
                 "keys": list(v.keys), "unit": _axis_unit(solver, v.keys[0]),
-                "base": _number(_get(base, v.keys[0])),
-            }  # fmt: skip
+                "base": _number(_get(base, v.keys[0])), "base_row": 1,
+            })  # fmt: skip
+            # the strength axis's points stand for the default value only if the axis's
+            # other keys (e.g. a start_offset set with beta) are at the base's values
+            if any(_get(cfg["scenes"][v.scene], k) != _get(base, k) for k in v.keys[1:]):
+                meta["base_row"] = 0
         knobs = _knobs(scene, c0)
         for scheme in ds["scheme"].values:
             p = ds.sel({"scheme": scheme})
@@ -456,6 +460,8 @@ SETTING_COLUMNS: dict[str, tuple[str, str]] = {
     "setting_cpu_s": ("s", "mean CPU time per point (failed points included)"),
     "setting_err_D": ("1", "RMS relative error of D over the points; NaN if one failed"),
     "setting_err_P": ("1", "RMS relative error of P over the points; NaN if one failed"),
+    "setting_err_D_err": ("1", "standard error of setting_err_D (the points' err_D_err)"),
+    "setting_err_P_err": ("1", "standard error of setting_err_P (the points' err_P_err)"),
     "setting_n_window": ("1", "particles in the window at the upstream density"),
     "setting_average_crossings": ("1", "average time in sound crossings of the window"),
     "setting_pareto_D": ("1", "1 on the case's Pareto front of setting_cpu_s, setting_err_D"),
@@ -495,7 +501,10 @@ def settings(points: xr.Dataset) -> xr.Dataset:
                            c["average_crossings"].values[sel][0])}  # fmt: skip
                 for q in ("D", "P"):
                     e = c[f"err_{q}"].values[sel].astype(float)
-                    row[f"setting_err_{q}"] = float(np.sqrt(np.mean(e**2)))  # NaN if any NaN
+                    se = c[f"err_{q}_err"].values[sel].astype(float)
+                    rms = float(np.sqrt(np.mean(e**2)))  # NaN if any NaN
+                    row[f"setting_err_{q}"] = rms
+                    row[f"setting_err_{q}_err"] = _rms_error(e, se, rms)
                 rows.append(row)
     n = len(rows)
     for q in ("D", "P"):
@@ -516,6 +525,17 @@ def settings(points: xr.Dataset) -> xr.Dataset:
         data[k] = ("setting", np.array([r[k] for r in rows], dtype=object),
                    {"long_name": k.split("_", 1)[1] + " of the setting"})  # fmt: skip
     return xr.Dataset(data).set_coords(["setting_case", "setting_scheme", "setting_variant"])
+
+
+def _rms_error(e: np.ndarray, se: np.ndarray, rms: float) -> float:
+    """Standard error of r = sqrt(mean e_i^2) from independent errors s_i of the e_i:
+    dr = sqrt(sum (e_i s_i)^2) / (n r); at r = 0, the RMS of the s_i (the first-order
+    propagation vanishes there)."""
+    if not math.isfinite(rms):
+        return math.nan
+    if rms == 0.0:
+        return float(np.sqrt(np.mean(se**2)))
+    return float(np.sqrt(np.sum((e * se) ** 2)) / (e.size * rms))
 
 
 def write_campaign(cfg: Mapping, aggregates: Sequence[str | Path], out: str | Path) -> Path:

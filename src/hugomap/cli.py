@@ -37,7 +37,8 @@ def main(argv: list[str] | None = None) -> int:
     p = stage("piston", "continue the piston run and measure the Hugoniot point")
     p.add_argument("--loaded", required=True)
     p.add_argument("--u-p", type=float, required=True)
-    stage("reference", "equilibrium-MD reference Hugoniot")
+    p = stage("reference", "equilibrium-MD reference Hugoniot")
+    p.add_argument("--shared", default=None, help="copy this reference made for the same inputs")
     p = stage("window", "cut the moving window out of the loading checkpoint")
     p.add_argument("--loaded", required=True)
     p.add_argument("--u-p", type=float, required=True)
@@ -115,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     elif args.cmd == "piston":
         pipeline.piston_point(args.loaded, _scene(args), args.u_p, args.out)
     elif args.cmd == "reference":
-        pipeline.reference_stage(_scene(args), args.out)
+        pipeline.reference_stage(_scene(args), args.out, args.shared)
     elif args.cmd in ("window", "amw", "mw") or args.cmd.startswith("dichotomy"):
         from . import pipeline_window as pw
 

@@ -543,3 +543,30 @@ def load_config(path: str | Path) -> dict:
 def config_hash(obj: Any) -> str:
     """SHA-256 (first 16 hex digits) of the canonical JSON of ``obj``."""
     return hashlib.sha256(json.dumps(obj, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def reference_inputs(scene: dict) -> dict | None:
+    """What an MD scene's equilibrium reference Hugoniot depends on (``pipeline.reference_stage``
+    reads nothing else): the potential block, the pole (``sample.rho0`` [σ⁻³], ``sample.T0``
+    [ε/k_B]), the sample's seed and the ``reference`` block. Scenes that agree on these share
+    one computation, ``results/references/<reference_key>.nc``, so a campaign's variants of
+    one scene (or a changed window setting) do not recompute it. None for a CSPH scene: its
+    reference is the material model's own Hugoniot, computed per scene in milliseconds."""
+    if scene.get("solver") == "csph":
+        return None
+    s = scene["sample"]
+    return {
+        "solver": "md",
+        "potential": dict(scene.get("potential", {})),
+        "sample": {"rho0": s["rho0"], "T0": s["T0"], "seed": s["seed"]},
+        "reference": dict(scene["reference"]),
+    }
+
+
+def reference_key(scene: dict) -> str | None:
+    """The shared reference's file stem: ``lj_`` and 12 hex digits of the SHA-256 of
+    ``reference_inputs`` (sorted-key JSON); None for a CSPH scene."""
+    inputs = reference_inputs(scene)
+    if inputs is None:
+        return None
+    return "lj_" + hashlib.sha256(json.dumps(inputs, sort_keys=True).encode()).hexdigest()[:12]

@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
+from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter  # noqa: E402
 
 
 def _cutoff(ds: xr.Dataset, scene: str) -> str:
@@ -160,7 +161,8 @@ OUTCOME_COLORS = {"ok": "tab:green", "not_converged": "goldenrod"}
 
 def speed_accuracy_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
     """CPU per point against the RMS relative error of P and of D, one marker per scheme
-    and resolution (``campaign.settings``), a row per case; the Pareto front as a staircase.
+    and resolution (``campaign.settings``), a row per case; the Pareto front as a staircase;
+    bars: one standard error of the RMS (statistics of the points and of the reference).
     A setting with a failed point has no error: it is drawn as a cross on the top edge."""
     cases = list(dict.fromkeys(ds["setting_case"].values))
     fig, axes = plt.subplots(len(cases), 2, figsize=(10, 3.6 * len(cases)), squeeze=False)
@@ -172,12 +174,19 @@ def speed_accuracy_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
         for c, q in enumerate(("P", "D")):
             ax = axes[r, c]
             err = np.abs(ds[f"setting_err_{q}"].values[sel])
+            name = f"setting_err_{q}_err"
+            se = ds[name].values[sel] if name in ds else np.full(err.shape, np.nan)
             ok = np.isfinite(err)
             top = 2.0 * np.nanmax(err) if ok.any() else 1.0
             for i in range(sel.sum()):
                 scheme = str(ds["setting_scheme"].values[sel][i])
                 variant = str(ds["setting_variant"].values[sel][i])
                 y = max(err[i], 1e-5) if ok[i] else top
+                if ok[i] and np.isfinite(se[i]) and se[i] > 0:
+                    # one standard error; the lower bar stops above zero on the log axis
+                    lo = min(se[i], 0.9 * y)
+                    ax.errorbar(cpu[i], y, yerr=[[lo], [se[i]]], color=colors[variant],
+                                lw=0.8, capsize=2, zorder=2)  # fmt: skip
                 ax.scatter(cpu[i], y, marker=SCHEME_MARKERS.get(scheme, "x") if ok[i] else "x",
                            color=colors[variant], s=55, zorder=3,
                            edgecolors="k" if ok[i] else None, linewidths=0.5)  # fmt: skip
@@ -252,18 +261,23 @@ def stability_map_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
             meta = axes_meta[case][axis]
             on = (case_v == case) & (axis_v == axis)
             schemes = list(dict.fromkeys(scheme_v[on]))
-            values = sorted({*ds["axis_value"].values[on].astype(float), meta["base"]})
+            own = set(ds["axis_value"].values[on].astype(float))
+            # the default value's row: the axis's own points if it ran it, else the strength
+            # panel's (when the axis's other keys are at the base's values: base_row)
+            with_base = meta["base"] not in own and meta.get("base_row", 1)
+            values = sorted(own | ({meta["base"]} if with_base else set()))
             for val in values:
                 for s in schemes:
-                    if val == meta["base"]:
-                        m = base & (scheme_v == s)
-                        tag = f"{val:.3g} (default)"
-                    else:
+                    if val in own:
                         m = on & (scheme_v == s) & np.isclose(ds["axis_value"].values, val)
-                        tag = f"{val:.3g}"
+                    else:
+                        m = base & (scheme_v == s)
+                    tag = f"{val:.3g}" + (" (default)" if val == meta["base"] else "")
                     rows.append((f"{s} {tag}", m))
             unit = meta["unit"]
-            title = f"{case}: {' + '.join(meta['keys'])}" + (f" [{unit}]" if unit != "1" else "")
+            more = len(meta["keys"]) - 1
+            title = (f"{case}: {axis} = {meta['keys'][0]}" + (f" [{unit}]" if unit != "1" else "")
+                     + (f" (+{more} key{'s' * (more > 1)})" if more else ""))  # fmt: skip
         for y, (_, m) in enumerate(rows):
             for i in np.flatnonzero(m):
                 st = str(ds["status"].values[i])
@@ -272,6 +286,10 @@ def stability_map_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
         ax.set_yticks(range(len(rows)), [r[0] for r in rows], fontsize=7)
         ax.set_ylim(-0.7, len(rows) - 0.3)
         ax.set_xscale("log")
+        # labels at 1, 2, 5 per decade only: a narrow range otherwise labels every minor tick
+        ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("u_p / c0")
         ax.set_title(title if len(title) < 70 else title[:67] + "...", fontsize=9)
         ax.grid(True, axis="x", alpha=0.3)

@@ -335,21 +335,40 @@ def piston_point(
     return path
 
 
-def reference_stage(scene: dict, out: str | os.PathLike) -> Path:
+def reference_stage(
+    scene: dict, out: str | os.PathLike, shared: str | os.PathLike | None = None
+) -> Path:
     """The equilibrium-MD reference Hugoniot of the scene's pole and potential (a CSPH
-    scene: its material model's Hugoniot, ``pipeline_sph.reference_stage``)."""
+    scene: its material model's Hugoniot, ``pipeline_sph.reference_stage``).
+
+    MD: computed from ``config.reference_inputs(scene)`` (stored as the ``reference_inputs``
+    attribute), or, with ``shared``, copied from a reference computed for the same inputs
+    (``results/references/<key>.nc``); a shared file made from other inputs is refused."""
     if scene.get("solver") == "csph":
         from . import pipeline_sph
 
         return pipeline_sph.reference_stage(scene, out)
     from .analysis.reference import reference_hugoniot
+    from .config import reference_inputs
 
-    s, r = scene["sample"], scene["reference"]
-    ds = reference_hugoniot(
-        s["rho0"], s["T0"], _lj(scene),
-        compressions=r["compressions"], cells=(r["cells"],) * 3, dt=r["dt"],
-        n_equil=r["equilibrate_steps"], n_prod=r["production_steps"], seed=s["seed"],
-    )  # fmt: skip
+    want = json.dumps(reference_inputs(scene), sort_keys=True)
+    if shared is not None:
+        with xr.open_dataset(shared, engine="netcdf4") as r:
+            ds = r.load()
+        got = ds.attrs.get("reference_inputs")
+        if got != want:
+            raise ValueError(
+                f"{shared}: this reference was computed for {got}, not for scene "
+                f"{scene.get('name', '?')!r} ({want}); delete the file and rerun"
+            )
+    else:
+        s, r = scene["sample"], scene["reference"]
+        ds = reference_hugoniot(
+            s["rho0"], s["T0"], _lj(scene),
+            compressions=r["compressions"], cells=(r["cells"],) * 3, dt=r["dt"],
+            n_equil=r["equilibrate_steps"], n_prod=r["production_steps"], seed=s["seed"],
+        )  # fmt: skip
+        ds.attrs["reference_inputs"] = want
     ds.attrs["scene_config"] = json.dumps(scene)
     return write_netcdf(ds, out)
 

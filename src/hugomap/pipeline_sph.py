@@ -501,7 +501,9 @@ def window_start(
     (A = 1 m² in 1D, the periodic width W in 2D; m the inflow particle's mass) with ρ_sh the
     slab behind the front at the end of loading (2D: mean density over the width, pores
     counted) and ρ0 the upstream density (2D: the inflow tile's mean density, which is also
-    the window point's pole: it is the material the window feeds)."""
+    the window point's pole: it is the material the window feeds). With
+    ``window.start_offset`` ε ≠ 0 every velocity then gets ε D_guess (a deliberately wrong
+    frame: the front runs at ~ε D)."""
     fill_csph_defaults(scene)
     attrs = {"stage": "window", "u_p": u_p, "scene_config": json.dumps(scene)}
     with xr.open_dataset(loaded, engine="netcdf4") as ds:
@@ -549,6 +551,9 @@ def window_start(
             while win.time < t_end:
                 win.advance(w["sync_steps"])
             log.info("settled %.3g s in %d steps", w["settle_time"], win.sim.steps - steps0)
+        if w["start_offset"]:
+            # a deliberately wrong frame (stability maps): the front runs at ~start_offset D
+            win.galilean_shift(w["start_offset"] * float(a))
     except (ValueError, SampleError) as exc:
         return _failure(out, "no_inflow", str(exc), attrs)
     except SPHUnstable as exc:
@@ -558,6 +563,7 @@ def window_start(
            "q_sh": L * win.area * shocked["rho"] / win.m0, "bin_width": sh["bin_width"]}  # fmt: skip
     cost = _cost(t0, c0, 0.0, json.loads(ds.attrs.get("cost", "{}")))
     return win.save(out, attrs={**attrs, "status": "ok", "D_guess": float(a),
+                                "start_offset": w["start_offset"],
                                 "omega_signal": json.dumps(sig), "pole": json.dumps(pole),
                                 "cost": json.dumps(cost), "inflow": json.dumps(extra)})  # fmt: skip
 

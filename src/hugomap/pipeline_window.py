@@ -48,6 +48,8 @@ def window_start(
     and the window runs ``window.settle_time`` at that guess before it is saved;
     ω is normalised by the pole (upstream: ρ0, P0) and the shocked state measured in the new
     window (the slab between the outflow edge and the front, ``shock.gap`` clear of both).
+    With ``window.start_offset`` ε ≠ 0 every velocity then gets ε D_guess: the saved frame is
+    off by that much, the front runs at about ε D, and each scheme must find D itself.
     A CSPH scene (1D) goes to ``pipeline_sph.window_start``.
     """
     if scene.get("solver") == "csph":
@@ -105,6 +107,9 @@ def window_start(
         win.advance(int(round(w["settle_time"] / win.dt)))
     except (SolverUnstable, WindowError) as exc:
         return _failure(out, exc.status, exc.diagnostic, attrs)
+    if w["start_offset"]:
+        # a deliberately wrong frame (stability maps): the front runs at ~start_offset D
+        win.galilean_shift(w["start_offset"] * D_guess)
     g, bw = win.geom, sh["bin_width"]
     sums = win.profile_sums(bw)
     edges = np.arange(sums.shape[0] + 1) * bw
@@ -124,7 +129,7 @@ def window_start(
         out,
         extra=extra,
         attrs={
-            **attrs, "status": "ok", "D_guess": D_guess,
+            **attrs, "status": "ok", "D_guess": D_guess, "start_offset": w["start_offset"],
             **{f"inflow_{k}": v for k, v in inflow.items()},
             "omega_signal": json.dumps({"kind": sig.kind, "q_up": sig.q_up, "q_sh": sig.q_sh,
                                         "bin_width": sig.bin_width}),

@@ -42,7 +42,7 @@ from .config import load_config, point_tag
 
 DONE_STATES = ("ok", "not_converged")
 STATES = ("ok", "not_converged", "failed", "running", "pending")
-RESERVED = ("hugoniot", "figures", "logs", "campaign")
+RESERVED = ("hugoniot", "figures", "logs", "campaign", "references")
 PART_SUFFIX = ".part.nc"
 SCHEMES = ("piston", "amw", "mw", "dichotomy")  # every scheme the workflow knows
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")  # those that start from the window checkpoint
@@ -377,7 +377,8 @@ def sweep_status(
             d
             for top in (results, results / "logs")
             for d in (top.iterdir() if top.is_dir() else [])
-            if d.is_dir() and not (top == results and d.name in RESERVED)
+            # logs/references/ holds the shared references' logs: not a scene either
+            if d.is_dir() and d.name not in RESERVED
         ]
         scenes = {
             name: (None, None)

@@ -2,9 +2,9 @@
 (issue 5): real runs of the pipeline stages on a 1D CSPH window, pushed into each failure.
 
 Set-up: 1D copper without strength (200 particles of 10 µm), u_p = 1000 m/s, the window
-(100 dx, front at 0.6 L) cut by ``window_start`` and put in a frame 2 % slower than the
-loading stage's D guess, so the front runs at ~110 m/s through the window until a scheme
-corrects it. Forced failures, one per cause (``status.FAILURES``):
+(100 dx, front at 0.6 L) cut by ``window_start`` with ``window.start_offset = 0.02``: a frame
+2 % slower than the loading stage's D guess, so the front runs at ~110 m/s through the
+window until a scheme corrects it. Forced failures, one per cause (``status.FAILURES``):
 
 - AMW β = 3: each shift overshoots by 2×, the slopes alternate and grow → ``diverged``;
 - AMW β = 2: each shift reverses the front speed exactly → ``oscillating``;
@@ -62,19 +62,19 @@ def _scene(**window) -> dict:
 
 @pytest.fixture(scope="module")
 def windows(tmp_path_factory) -> dict[str, Path]:
-    """The shifted window checkpoint, and a copy with one NaN velocity."""
+    """The window checkpoint in the offset frame, and a copy with one NaN velocity."""
     d = tmp_path_factory.mktemp("fail")
-    scene = _scene()
+    scene = _scene(start_offset=1.0 - OFFSET)
     ps.prepare_sample(scene, d / "sample.nc")
     ps.load_to_target_stage(d / "sample.nc", scene, UP, d / "loaded.nc")
-    ps.window_start(d / "loaded.nc", scene, UP, d / "window.nc")
-    ds = ps._load(d / "window.nc")
+    ps.window_start(d / "loaded.nc", scene, UP, d / "shifted.nc")
+    ds = ps._load(d / "shifted.nc")
     assert ds.attrs["status"] == "ok", ds.attrs.get("diagnostic")
     keep = ("stage", "u_p", "scene_config", "status", "D_guess", "omega_signal", "pole", "cost")
     attrs = {k: ds.attrs[k] for k in keep}
-    win = SPHWindow.from_dataset(ds, d / "window.nc")
-    win.galilean_shift((1.0 - OFFSET) * -win.u_in)
-    win.save(d / "shifted.nc", attrs=attrs)
+    win = SPHWindow.from_dataset(ds, d / "shifted.nc")
+    # the offset frame: u_in = -(1 - start_offset) D_guess
+    assert win.u_in == pytest.approx(-OFFSET * float(ds.attrs["D_guess"]), rel=1e-12)
     mobile = np.flatnonzero(~win.sim.frozen) if win.sim.frozen is not None else [0]
     win.sim.state.v[mobile[len(mobile) // 2], 0] = np.nan
     win.save(d / "nan.nc", attrs=attrs)
@@ -95,6 +95,8 @@ def _assert_failed_point(path: Path, status: str) -> xr.Dataset:
     assert str(ds["status"].values) == status, str(ds["diagnostic"].values)
     assert str(ds["diagnostic"].values), "a failure without a diagnostic"
     assert math.isnan(float(ds["D"])) and math.isnan(float(ds["P"]))
+    # the layout of a usable point: the errors are there, NaN (io.dataset.ALWAYS_WITH_ERR)
+    assert math.isnan(float(ds["D_err"])) and math.isnan(float(ds["P_err"]))
     return ds
 
 

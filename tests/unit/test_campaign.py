@@ -20,6 +20,7 @@ import xarray as xr
 from hugomap import campaign as cp
 from hugomap.cli import main
 from hugomap.config import ConfigError, validate_config
+from hugomap.figures import stability_map_figure
 from hugomap.io.atomic import write_netcdf
 from hugomap.io.dataset import point_dataset
 from hugomap.pipeline import aggregate
@@ -204,6 +205,12 @@ def test_dataset_errors_labels_and_settings(tmp_path):
     assert st.loc[("amw", "coarse"), "setting_n_usable"] == 1
     assert math.isnan(st.loc[("amw", "coarse"), "setting_err_D"])
     assert st.loc[("piston", "coarse"), "setting_err_D"] == pytest.approx(0.02, abs=1e-12)
+    # its standard error: two points of e = -0.02, each +- 0.001 (1 + e) (the points' D_err,
+    # the reference exact): sqrt(2 (e s)^2) / (2 |e|) = s / sqrt(2)
+    assert st.loc[("piston", "coarse"), "setting_err_D_err"] == pytest.approx(
+        0.001 * 0.98 / math.sqrt(2), rel=1e-9
+    )
+    assert math.isnan(st.loc[("amw", "coarse"), "setting_err_D_err"])
     assert st.loc[("amw", "mid"), "setting_cpu_s"] == pytest.approx(6.0)
     # Pareto in D: piston coarse (1 s, 2 %), piston mid (2 s, 1 %), amw mid (6 s, 1.5 %:
     # beaten) -> the two pistons; amw coarse has no error
@@ -226,3 +233,23 @@ def test_cli_writes_dataset_chart_and_map(tmp_path):
     with pytest.raises(ValueError, match="no aggregate for scene"):
         main(["campaign", "--config-json", json.dumps(_config()), "--out", str(out),
               "--chart", str(chart), "--map", str(smap), *map(str, aggs[:-1])])  # fmt: skip
+
+
+def test_default_row_only_where_the_axis_keeps_the_base_settings(tmp_path):
+    """An axis that sets a second key away from the base (beta with a start_offset) cannot
+    borrow the strength panel's points for its default value: base_row = 0; the map then
+    draws only the axis's own rows."""
+    raw = _config()
+    axes = raw["campaign"]["cases"]["cu"]["stability"]["axes"]
+    axes["kick"] = {"schemes": ["amw"],
+                    "set": {"window.amw.beta": [0.5, 2.5], "window.start_offset": [0.02, 0.02]}}  # fmt: skip
+    cfg = validate_config(raw)
+    assert cfg["scenes"]["cu__kick1"]["window"]["start_offset"] == 0.02
+    assert cfg["scenes"]["cu__mid"]["window"]["start_offset"] == 0.0
+    aggs = _aggregates(tmp_path, cfg, _outcome)
+    ds = cp.campaign_dataset(cfg, {Path(a).stem: a for a in aggs})
+    meta = json.loads(ds.attrs["axes"])["cu"]
+    assert meta["beta"]["base_row"] == 1 and meta["kick"]["base_row"] == 0
+    assert meta["kick"]["base"] == 0.5
+    stability_map_figure(ds, tmp_path / "map.png")
+    assert (tmp_path / "map.png").stat().st_size > 10_000

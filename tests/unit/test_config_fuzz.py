@@ -386,16 +386,25 @@ def test_schema_drawn_configs(cfg: dict) -> None:
 
 
 def test_schema_drawn_configs_reach_both_outcomes() -> None:
-    """The schema-driven strategy is not vacuous: it yields accepted and refused configs."""
+    """The schema-driven strategy is not vacuous: draws near the tiny config are sometimes
+    accepted, wild draws sometimes refused. (Each kind on its own: Hypothesis mixes
+    constants of the modules imported so far into its draws, so a mixed sample's balance
+    depended on which tests had run before this one.)"""
+    for wild, outcome in ((False, "accepted"), (True, "refused")):
+        assert outcome in _outcomes(_configs(wild)), wild
+
+
+def _outcomes(strategy: st.SearchStrategy) -> set[str]:
+    """check()'s outcomes over 60 derandomized draws of ``strategy``."""
     seen: set[str] = set()
 
     @settings(max_examples=60, deadline=None, derandomize=True, database=None)
-    @given(schema_configs)
+    @given(strategy)
     def run(cfg: dict) -> None:
         seen.add(check(cfg))
 
     run()
-    assert seen == {"accepted", "refused"}
+    return seen
 
 
 @pytest.mark.parametrize(
@@ -427,13 +436,15 @@ def test_non_string_and_reserved_scene_names() -> None:
     cfg = copy.deepcopy(BASES["tiny"])
     scene = cfg["scenes"].pop("tiny")
     # "A\n" matched the old pattern ^...$ (Python's $ matches before a final newline).
-    cfg["scenes"].update({1: scene, "hugoniot": copy.deepcopy(scene), "A\n": scene, "ok": 5})
+    cfg["scenes"].update({1: scene, "hugoniot": copy.deepcopy(scene), "A\n": scene, "ok": 5,
+                          "references": copy.deepcopy(scene)})  # fmt: skip
     cfg[2] = 0
     with pytest.raises(ConfigError) as ei:
         validate_config(cfg)
     msg = str(ei.value)
     assert "scenes: key 1 is not allowed" in msg
     assert "scenes: key 'hugoniot' is not allowed" in msg
+    assert "scenes: key 'references' is not allowed" in msg
     assert "scenes: key 'A\\n' is not allowed" in msg
     assert "scenes.ok = 5: must be of type object" in msg
     assert "(top level): unknown key(s) [2]" in msg

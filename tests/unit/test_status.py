@@ -202,10 +202,14 @@ def test_cli_table_and_bad_config(
 
 def test_without_config_scenes_come_from_disk(sweep: tuple[Path, Path]) -> None:
     """No config: every scene folder with a sample or point folders (in results/ or
-    results/logs/); u_p from the folders; hugoniot/, figures/ and logs/ are not scenes."""
+    results/logs/); u_p from the folders; hugoniot/, figures/, logs/, campaign/ and
+    references/ (and their logs) are not scenes."""
     res, _ = sweep
     other = res / "other"
     _point(other / "up2/piston.nc", "ok", "", 2.0)
+    for d in (res / "references", res / "logs" / "references", res / "campaign"):
+        d.mkdir(parents=True, exist_ok=True)
+    (res / "references" / "lj_0123456789ab.nc").write_bytes(b"")
     report = sweep_status(res, None, now=NOW)
     assert [s["scene"] for s in report["scenes"]] == ["other", "tiny"]
     tiny = report["scenes"][1]

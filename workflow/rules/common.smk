@@ -157,6 +157,54 @@ def md_runtime(stage):
     return runtime
 
 
+# The MD reference Hugoniot is computed once per distinct set of the inputs it depends on
+# (hugomap.config.reference_inputs) and copied into each scene's folder.
+def shared_references():
+    """Reference key -> the first MD scene (config order) with those reference inputs."""
+    from hugomap.config import reference_key
+
+    out = {}
+    for name, scene in config["scenes"].items():
+        key = reference_key(scene)
+        if key is not None:
+            out.setdefault(key, name)
+    return out
+
+
+def shared_reference_file(wildcards):
+    """The shared reference an MD scene copies (none for CSPH: computed per scene)."""
+    from hugomap.config import reference_key
+
+    key = reference_key(config["scenes"][wildcards.scene])
+    return [] if key is None else [f"{RES}/references/{key}.nc"]
+
+
+def _reference_wildcards(wildcards):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(scene=shared_references()[wildcards.key])
+
+
+def shared_reference_json(wildcards):
+    from hugomap.config import reference_inputs
+
+    scene = config["scenes"][shared_references()[wildcards.key]]
+    return json.dumps(reference_inputs(scene), sort_keys=True)
+
+
+def shared_reference_mem_mb(wildcards, attempt):
+    return md_mem_mb("reference")(_reference_wildcards(wildcards), attempt)
+
+
+def shared_reference_runtime(wildcards, threads, attempt):
+    return md_runtime("reference")(_reference_wildcards(wildcards), threads, attempt)
+
+
+def scene_reference_runtime(wildcards, threads, attempt):
+    """A CSPH scene computes its reference (seconds); an MD scene copies the shared one."""
+    return attempt * MD_STARTUP_MIN
+
+
 def summary_runtime(wildcards, attempt):
     """runtime [min] of aggregate / figures: a few seconds per 100 point files."""
     return attempt * (5 + len(config["scenes"][wildcards.scene]["shock"]["u_p"]) // 100)

@@ -69,7 +69,30 @@ rule piston_point:
         " --out {output} > {log} 2>&1"
 
 
+rule md_reference:
+    output:
+        f"{RES}/references/{{key}}.nc",
+    log:
+        f"{RES}/logs/references/{{key}}.log",
+    wildcard_constraints:
+        key="lj_[0-9a-f]{12}",
+    conda:
+        "../envs/hugomap.yaml"
+    threads: 1
+    resources:
+        mem_mb=shared_reference_mem_mb,
+        runtime=shared_reference_runtime,
+    params:
+        py=PY,
+        inputs=shared_reference_json,
+    shell:
+        "NUMBA_NUM_THREADS=1 {params.py} -m hugomap reference --scene-json {params.inputs:q}"
+        " --out {output} > {log} 2>&1"
+
+
 rule reference:
+    input:
+        shared_reference_file,
     output:
         f"{RES}/{{scene}}/reference.nc",
     log:
@@ -79,10 +102,11 @@ rule reference:
     threads: 1
     resources:
         mem_mb=md_mem_mb("reference"),
-        runtime=md_runtime("reference"),
+        runtime=scene_reference_runtime,
     params:
         py=PY,
         scene=scene_json,
+        shared=lambda wildcards, input: f"--shared {input[0]}" if input else "",
     shell:
         "NUMBA_NUM_THREADS=1 {params.py} -m hugomap reference --scene-name {wildcards.scene}"
-        " --scene-json {params.scene:q} --out {output} > {log} 2>&1"
+        " --scene-json {params.scene:q} {params.shared} --out {output} > {log} 2>&1"

@@ -61,6 +61,11 @@ POLE_VARS: dict[str, tuple[str, str]] = {
     "Pyy0": (P_UNIT, "pole: transverse stress P_yy of the prepared sample"),
 }
 ERR_SUFFIX = "_err"
+# Every point file carries these with their standard errors (NaN for a failed point), so an
+# aggregate has the same layout whichever points failed (a scene whose every point failed
+# still has D_err).
+ALWAYS_WITH_ERR = ("D", "u_p_measured", "rho", "V", "P", "E", "E_minus_E0",
+                   "residual_mass", "residual_momentum", "residual_energy")  # fmt: skip
 
 # -- units per solver ---------------------------------------------------------------------
 # MD writes Lennard-Jones reduced units (the tables above, unchanged); CSPH writes SI. The
@@ -195,7 +200,7 @@ def point_dataset(
         {
             k + ERR_SUFFIX: values.get(k + ERR_SUFFIX, np.nan)
             for k in point_vars
-            if k + ERR_SUFFIX in values
+            if k + ERR_SUFFIX in values or k in ALWAYS_WITH_ERR
         }
     )
     data = scalar_vars(vals, point_vars)
