@@ -40,6 +40,7 @@ import pandas as pd  # noqa: E402
 import xarray as xr  # noqa: E402
 
 from hugomap.analysis.stats import linear_hugoniot_fit  # noqa: E402
+from hugomap.campaign import reference_at  # noqa: E402
 from hugomap.status import FAILURES  # noqa: E402
 
 RESULTS = Path(os.environ.get("HUGOMAP_RESULTS", "results"))
@@ -159,11 +160,13 @@ for name, ds in scenes.items():
             st = str(p["status"].values[i])
             if st not in USABLE or not (ru.size and ru.min() <= u <= ru.max()):
                 continue
+            # D linear in u_p, P on the pole's Rayleigh line (campaign.reference_at)
+            at = reference_at(u, ru, {"D": rd, "P": rp, "D_err": 0 * ru, "P_err": 0 * ru})
             rows.append({
                 "scene": name, "scheme": str(scheme), "u_p": float(u), "status": st,
                 "cpu_s": float(p["cpu_s"].values[i]),
-                "P_rel_err": abs(float(p["P"].values[i]) / np.interp(u, ru, rp) - 1.0),
-                "D_rel_err": abs(float(p["D"].values[i]) / np.interp(u, ru, rd) - 1.0),
+                "P_rel_err": abs(float(p["P"].values[i]) / at["P"] - 1.0),
+                "D_rel_err": abs(float(p["D"].values[i]) / at["D"] - 1.0),
             })  # fmt: skip
 cost = pd.DataFrame(rows, columns=["scene", "scheme", "u_p", "status", "cpu_s", "P_rel_err",
                                    "D_rel_err"])  # fmt: skip

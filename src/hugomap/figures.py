@@ -286,8 +286,13 @@ def stability_map_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
         ax.set_yticks(range(len(rows)), [r[0] for r in rows], fontsize=7)
         ax.set_ylim(-0.7, len(rows) - 0.3)
         ax.set_xscale("log")
-        # labels at 1, 2, 5 per decade only: a narrow range otherwise labels every minor tick
-        ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        # labels at 1, 2, 5 per decade (every minor tick's label overlapped on a narrow
+        # range), at every digit where the panel spans less than a decade
+        xs = x_all[np.any([m for _, m in rows], axis=0)] if rows else np.empty(0)
+        xs = xs[np.isfinite(xs) & (xs > 0)]
+        narrow = xs.size and xs.max() < 10 * xs.min()
+        subs = tuple(range(1, 10)) if narrow else (1.0, 2.0, 5.0)
+        ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=subs))
         ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
         ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("u_p / c0")

@@ -900,7 +900,10 @@ def reference_stage(scene: dict, out: str | os.PathLike, n_points: int = 60) -> 
     fill_csph_defaults(scene)
     e = scene["material"]["eos"]
     solid = MGSolid(e["rho0"], e["c0"], e["s"], e["gamma0"])
-    ups = np.linspace(0.0, 1.25 * max(scene["shock"]["u_p"]), n_points + 1)[1:]
+    # an even grid to 1.25 max(u_p), and the scene's own u_p (a weak one can lie below the
+    # grid's first point, where the campaign's interpolation would give no error)
+    grid = np.linspace(0.0, 1.25 * max(scene["shock"]["u_p"]), n_points + 1)[1:]
+    ups = np.unique(np.concatenate([grid, np.asarray(scene["shock"]["u_p"], float)]))
     por = scene["sample"].get("porous") if scene["dim"] == 2 else None
     if por is None:
         h, model = solid_hugoniot_from_up(ups, solid), "solid D = c0 + s u_p"

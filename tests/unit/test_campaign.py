@@ -243,6 +243,9 @@ def test_default_row_only_where_the_axis_keeps_the_base_settings(tmp_path):
     axes = raw["campaign"]["cases"]["cu"]["stability"]["axes"]
     axes["kick"] = {"schemes": ["amw"],
                     "set": {"window.amw.beta": [0.5, 2.5], "window.start_offset": [0.02, 0.02]}}  # fmt: skip
+    # keys that vary together along the axis keep the base on it
+    axes["avg"] = {"schemes": ["amw"],
+                   "set": {"window.window_time": [2e-7, 2e-6], "window.average_time": [1e-6, 8e-6]}}  # fmt: skip
     cfg = validate_config(raw)
     assert cfg["scenes"]["cu__kick1"]["window"]["start_offset"] == 0.02
     assert cfg["scenes"]["cu__mid"]["window"]["start_offset"] == 0.0
@@ -250,6 +253,27 @@ def test_default_row_only_where_the_axis_keeps_the_base_settings(tmp_path):
     ds = cp.campaign_dataset(cfg, {Path(a).stem: a for a in aggs})
     meta = json.loads(ds.attrs["axes"])["cu"]
     assert meta["beta"]["base_row"] == 1 and meta["kick"]["base_row"] == 0
+    assert meta["avg"]["base_row"] == 1 and meta["avg"]["keys"][0] == "window.window_time"
     assert meta["kick"]["base"] == 0.5
     stability_map_figure(ds, tmp_path / "map.png")
     assert (tmp_path / "map.png").stat().st_size > 10_000
+
+
+def test_reference_at_follows_the_rayleigh_line():
+    """On a linear Us-up Hugoniot with a pole P0 (D = c0 + s u, P = P0 + rho0 D u) sampled
+    every 100 m/s, reference_at is exact between the points (D linear; P from the pole the
+    two bracketing points define), where interpolating P linearly errs by
+    rho0 s (u - u_a)(u_b - u); NaN outside the sampled range."""
+    rho0, p0 = 8930.0, 1.0e8
+    ru = np.arange(100.0, 1001.0, 100.0)
+    D = C0 + S * ru
+    ref = {"D": D, "P": p0 + rho0 * D * ru, "D_err": 0.01 * D, "P_err": np.zeros_like(ru)}
+    for u in (100.0, 150.0, 437.5, 999.0):
+        at = cp.reference_at(u, ru, ref)
+        assert at["D"] == pytest.approx(C0 + S * u, rel=1e-13)
+        assert at["P"] == pytest.approx(p0 + rho0 * (C0 + S * u) * u, rel=1e-13)
+        assert at["D_err"] == pytest.approx(0.01 * (C0 + S * u), rel=1e-13)
+    linear = float(np.interp(150.0, ru, ref["P"]))
+    assert linear - cp.reference_at(150.0, ru, ref)["P"] == pytest.approx(rho0 * S * 50 * 50)
+    assert all(math.isnan(v) for v in cp.reference_at(50.0, ru, ref).values())
+    assert all(math.isnan(v) for v in cp.reference_at(1001.0, ru, ref).values())

@@ -105,6 +105,8 @@ def test_reference_stage_solid_and_porous(tmp_path):
     assert np.allclose(ds["D"].values, C0 + S * u)
     assert np.allclose(ds["P"].values, RHO0 * (C0 + S * u) * u)
     assert ds["P"].attrs["units"] == "Pa" and "solid" in ds.attrs["reference_model"]
+    # the scene's own u_p are points of the curve (the grid steps by 625/60 m/s)
+    assert {100.0, 500.0} <= set(u.tolist()) and np.all(np.diff(u) > 0)
     dp = xr.load_dataset(reference_stage(_scene(True), tmp_path / "porous.nc"))
     h = porous_hugoniot_from_up(dp["u_p"].values, 1.35, COPPER)
     assert np.allclose(dp["P"].values, h.P) and np.allclose(dp["D"].values, h.D)

@@ -19,7 +19,8 @@ rule campaign:
     params:
         py=PY,
         config=lambda wildcards: json.dumps(
-            {k: v for k, v in config.items() if k != "scenes"}, sort_keys=True
+            # in the config's order: an axis's first key is its coordinate
+            {k: v for k, v in config.items() if k != "scenes"}
         ),
     shell:
         "{params.py} -m hugomap campaign --config-json {params.config:q} --out {output.nc}"
