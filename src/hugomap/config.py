@@ -564,9 +564,9 @@ def reference_inputs(scene: dict) -> dict | None:
 
 
 def reference_key(scene: dict) -> str | None:
-    """The shared reference's file stem: ``lj_`` and 12 hex digits of the SHA-256 of
-    ``reference_inputs`` (sorted-key JSON); None for a CSPH scene."""
+    """The shared reference's file stem: ``lj_`` and the first 12 hex digits of
+    ``config_hash(reference_inputs(scene))``; None for a CSPH scene."""
     inputs = reference_inputs(scene)
     if inputs is None:
         return None
-    return "lj_" + hashlib.sha256(json.dumps(inputs, sort_keys=True).encode()).hexdigest()[:12]
+    return "lj_" + config_hash(inputs)[:12]

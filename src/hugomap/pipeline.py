@@ -348,7 +348,6 @@ def reference_stage(
         from . import pipeline_sph
 
         return pipeline_sph.reference_stage(scene, out)
-    from .analysis.reference import reference_hugoniot
     from .config import reference_inputs
 
     want = json.dumps(reference_inputs(scene), sort_keys=True)
@@ -362,6 +361,8 @@ def reference_stage(
                 f"{scene.get('name', '?')!r} ({want}); delete the file and rerun"
             )
     else:
+        from .analysis.reference import reference_hugoniot  # numba kernels: not for a copy
+
         s, r = scene["sample"], scene["reference"]
         ds = reference_hugoniot(
             s["rho0"], s["T0"], _lj(scene),

@@ -158,37 +158,38 @@ def md_runtime(stage):
 
 
 # The MD reference Hugoniot is computed once per distinct set of the inputs it depends on
-# (hugomap.config.reference_inputs) and copied into each scene's folder.
-def shared_references():
-    """Reference key -> the first MD scene (config order) with those reference inputs."""
+# (hugomap.config.reference_inputs) and copied into each scene's folder. Keys per scene
+# (None for CSPH) and, per key, the first MD scene (config order) with those inputs: once,
+# when the workflow is parsed (the config is final by then).
+def _reference_keys():
     from hugomap.config import reference_key
 
-    out = {}
-    for name, scene in config["scenes"].items():
-        key = reference_key(scene)
-        if key is not None:
-            out.setdefault(key, name)
-    return out
+    return {name: reference_key(scene) for name, scene in config["scenes"].items()}
+
+
+REFERENCE_KEYS = _reference_keys()
+SHARED_REFERENCES = {}
+for _scene, _key in REFERENCE_KEYS.items():
+    if _key is not None:
+        SHARED_REFERENCES.setdefault(_key, _scene)
 
 
 def shared_reference_file(wildcards):
     """The shared reference an MD scene copies (none for CSPH: computed per scene)."""
-    from hugomap.config import reference_key
-
-    key = reference_key(config["scenes"][wildcards.scene])
+    key = REFERENCE_KEYS[wildcards.scene]
     return [] if key is None else [f"{RES}/references/{key}.nc"]
 
 
 def _reference_wildcards(wildcards):
     from types import SimpleNamespace
 
-    return SimpleNamespace(scene=shared_references()[wildcards.key])
+    return SimpleNamespace(scene=SHARED_REFERENCES[wildcards.key])
 
 
 def shared_reference_json(wildcards):
     from hugomap.config import reference_inputs
 
-    scene = config["scenes"][shared_references()[wildcards.key]]
+    scene = config["scenes"][SHARED_REFERENCES[wildcards.key]]
     return json.dumps(reference_inputs(scene), sort_keys=True)
 
 
