@@ -30,7 +30,7 @@ except ConfigError as exc:
 
 
 include: "workflow/rules/common.smk"
-include: "workflow/rules/md.smk"
+include: "workflow/rules/piston.smk"
 include: "workflow/rules/window.smk"
 include: "workflow/rules/hugoniot.smk"
 include: "workflow/rules/campaign.smk"

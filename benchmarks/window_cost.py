@@ -7,7 +7,7 @@ on the lj_liquid pole (ρ0* = 0.80, T0* = 2.0, rc = 2.5 σ shifted) at u_p = 2 �
 library's own stages (the same code the workflow runs):
 
 - piston: samples of 40, 80, 160 (and with ``--long`` 320) fcc cells along x (6 × 6 across),
-  each loaded and driven to the far end (``pipeline.load_to_target_stage`` +
+  each loaded and driven to the far end (``stages.load_to_target`` +
   ``piston_point``): simulated time ∝ sample length;
 - windows: one 50-σ window cut from the 80-cell loading checkpoint (``window_start``), then
   AMW and MW points with ``average_time`` = 5, 10, 20, 40 τ, and one dichotomy loop
@@ -134,7 +134,7 @@ def main() -> None:
     args = ap.parse_args()
     averages = (5.0, 10.0) if args.quick else AVERAGES
     logging.basicConfig(level=logging.WARNING)
-    from hugomap import pipeline, pipeline_window
+    from hugomap import stages
     from hugomap.md.window import MDWindow
 
     rows: list[dict] = []
@@ -149,12 +149,12 @@ def main() -> None:
         loaded80 = None
         for nx in lengths:
             scene = _scene(nx)
-            sample = pipeline.prepare_sample(scene, d / f"sample{nx}.nc")
-            loaded = pipeline.load_to_target_stage(sample, scene, U_P, d / f"loaded{nx}.nc")
+            sample = stages.prepare_sample(scene, d / f"sample{nx}.nc")
+            loaded = stages.load_to_target(sample, scene, U_P, d / f"loaded{nx}.nc")
             with xr.open_dataset(loaded) as ds:
                 load_cost = json.loads(ds.attrs["cost"])
                 t_load = float(ds["hist_t"].values[-1])
-            point = pipeline.piston_point(loaded, scene, U_P, d / f"piston{nx}.nc")
+            point = stages.piston_point(loaded, scene, U_P, d / f"piston{nx}.nc")
             with xr.open_dataset(point) as ds:
                 t = ds["history_t"].values
             row = _row(
@@ -172,33 +172,33 @@ def main() -> None:
                 loaded80 = loaded
         scene = _scene(80)
         c0 = time.process_time()
-        w0 = pipeline_window.window_start(loaded80, scene, U_P, d / "window.nc")
+        w0 = stages.window_start(loaded80, scene, U_P, d / "window.nc")
         setup = time.process_time() - c0
         t_w0 = MDWindow.load_path(w0).time
         _emit({"scheme": "window_start", "cpu_s": setup, "status": "ok"}, rows)
         for scheme in ("amw", "mw"):
             for avg in averages:
                 sc = _scene(80, avg)
-                p = pipeline_window.control_point(w0, sc, U_P, d / f"{scheme}{avg}.nc", scheme)
+                p = stages.control_point(w0, sc, U_P, d / f"{scheme}{avg}.nc", scheme)
                 with xr.open_dataset(p) as ds:
                     t_end = float(ds["history_t"].values[-1]) if "history_t" in ds else np.nan
                 _emit(_row(p, scheme, {"average_time": avg, "sim_time": t_end - t_w0}), rows)
         # The dichotomy: its loop once (the trials), then the final average at the root.
         k, trials = 0, []
-        st = pipeline_window.dichotomy_state(w0, scene, 0, None, [], d / "state0.json")
+        st = stages.dichotomy_state(w0, scene, 0, None, [], d / "state0.json")
         while not json.loads(Path(st).read_text())["done"]:
             pending = json.loads(Path(st).read_text())["pending"]
-            new = [pipeline_window.dichotomy_trial(w0, scene, st, i, d / f"trial{k}_{i}.json")
+            new = [stages.dichotomy_trial(w0, scene, st, i, d / f"trial{k}_{i}.json")
                    for i in range(len(pending))]  # fmt: skip
             trials += new
             k += 1
-            st = pipeline_window.dichotomy_state(w0, scene, k, str(st), [str(f) for f in new],
+            st = stages.dichotomy_state(w0, scene, k, str(st), [str(f) for f in new],
                                                  d / f"state{k}.json")  # fmt: skip
         n_trials = len(trials)
         trial_time = scene["window"]["dichotomy"]["trial_time"]
         for avg in averages:
             sc = _scene(80, avg)
-            p = pipeline_window.dichotomy_point(w0, sc, U_P, str(st), [str(f) for f in trials],
+            p = stages.dichotomy_point(w0, sc, U_P, str(st), [str(f) for f in trials],
                                                 d / f"dich{avg}.nc")  # fmt: skip
             _emit(_row(p, "dichotomy", {"average_time": avg, "trials": n_trials,
                                         "sim_time": n_trials * trial_time + avg}), rows)  # fmt: skip

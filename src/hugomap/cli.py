@@ -107,33 +107,30 @@ def main(argv: list[str] | None = None) -> int:
             print(exc, file=sys.stderr)
             return 2
 
-    from . import pipeline
+    from . import stages
 
     if args.cmd == "prepare":
-        pipeline.prepare_sample(_scene(args), args.out)
+        stages.prepare_sample(_scene(args), args.out)
     elif args.cmd == "load":
-        pipeline.load_to_target_stage(args.sample, _scene(args), args.u_p, args.out)
+        stages.load_to_target(args.sample, _scene(args), args.u_p, args.out)
     elif args.cmd == "piston":
-        pipeline.piston_point(args.loaded, _scene(args), args.u_p, args.out)
+        stages.piston_point(args.loaded, _scene(args), args.u_p, args.out)
     elif args.cmd == "reference":
-        pipeline.reference_stage(_scene(args), args.out, args.shared)
-    elif args.cmd in ("window", "amw", "mw") or args.cmd.startswith("dichotomy"):
-        from . import pipeline_window as pw
-
-        if args.cmd == "window":
-            pw.window_start(args.loaded, _scene(args), args.u_p, args.out)
-        elif args.cmd in ("amw", "mw"):
-            pw.control_point(args.window, _scene(args), args.u_p, args.out, args.cmd)
-        elif args.cmd == "dichotomy-state":
-            pw.dichotomy_state(args.window, _scene(args), args.k, args.previous, args.trials,
+        stages.reference_stage(_scene(args), args.out, args.shared)
+    elif args.cmd == "window":
+        stages.window_start(args.loaded, _scene(args), args.u_p, args.out)
+    elif args.cmd in ("amw", "mw"):
+        stages.control_point(args.window, _scene(args), args.u_p, args.out, args.cmd)
+    elif args.cmd == "dichotomy-state":
+        stages.dichotomy_state(args.window, _scene(args), args.k, args.previous, args.trials,
                                args.out)  # fmt: skip
-        elif args.cmd == "dichotomy-trial":
-            pw.dichotomy_trial(args.window, _scene(args), args.state, args.index, args.out)
-        else:
-            pw.dichotomy_point(args.window, _scene(args), args.u_p, args.state, args.trials,
+    elif args.cmd == "dichotomy-trial":
+        stages.dichotomy_trial(args.window, _scene(args), args.state, args.index, args.out)
+    elif args.cmd == "dichotomy-point":
+        stages.dichotomy_point(args.window, _scene(args), args.u_p, args.state, args.trials,
                                args.out)  # fmt: skip
     elif args.cmd == "aggregate":
-        pipeline.aggregate(
+        stages.aggregate(
             args.points, args.reference, json.loads(args.config_json), args.scene_name, args.out
         )
     elif args.cmd == "figures":

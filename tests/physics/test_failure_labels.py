@@ -32,10 +32,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from hugomap import pipeline_sph as ps
+from hugomap import stages as ps
 from hugomap.campaign import campaign_dataset
 from hugomap.config import validate_config
-from hugomap.pipeline import aggregate
+from hugomap.stages import aggregate
 from hugomap.sph.window import SPHWindow
 from hugomap.status import FAILURES
 
@@ -66,7 +66,7 @@ def windows(tmp_path_factory) -> dict[str, Path]:
     d = tmp_path_factory.mktemp("fail")
     scene = _scene(start_offset=1.0 - OFFSET)
     ps.prepare_sample(scene, d / "sample.nc")
-    ps.load_to_target_stage(d / "sample.nc", scene, UP, d / "loaded.nc")
+    ps.load_to_target(d / "sample.nc", scene, UP, d / "loaded.nc")
     ps.window_start(d / "loaded.nc", scene, UP, d / "shifted.nc")
     ds = ps._load(d / "shifted.nc")
     assert ds.attrs["status"] == "ok", ds.attrs.get("diagnostic")

@@ -9,7 +9,7 @@ References and tolerances:
   one, while a broken front tracker, stress or energy accounting (errors of 5 % and more)
   fails it. A 6,000-atom sample was too small: its energy error was 1.1–1.5 %, and one seed
   failed the bound at −2.3 % (CI run of 0d15548).
-- The equilibrium-MD Hugoniot (hugomap.analysis.reference: NVT states at which
+- The equilibrium-MD Hugoniot (hugomap.md.reference: NVT states at which
   E − E0 = ½(P + P0)(V0 − V)) for the same potential (rc = 2.5 σ, shifted) and pole: a shocked
   simple fluid is hydrostatic, so its P at the measured V must agree within 2 % (the issue's
   bound; the reference's own statistical error is about 0.5 %).
@@ -24,8 +24,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from hugomap import pipeline
-from hugomap.analysis.reference import interpolate_P, reference_hugoniot
+from hugomap import stages
+from hugomap.md.reference import interpolate_P, reference_hugoniot
 from hugomap.config import validate_config
 from hugomap.md.potential import LJParams
 
@@ -50,9 +50,9 @@ def point(tmp_path_factory) -> xr.Dataset:
     cfg = validate_config({"scenes": {"liq": copy.deepcopy(SCENE)}})
     scene = dict(cfg["scenes"]["liq"], name="liq")
     d: Path = tmp_path_factory.mktemp("piston")
-    pipeline.prepare_sample(scene, d / "sample.nc")
-    pipeline.load_to_target_stage(d / "sample.nc", scene, 2.0, d / "loaded.nc")
-    pipeline.piston_point(d / "loaded.nc", scene, 2.0, d / "point.nc")
+    stages.prepare_sample(scene, d / "sample.nc")
+    stages.load_to_target(d / "sample.nc", scene, 2.0, d / "loaded.nc")
+    stages.piston_point(d / "loaded.nc", scene, 2.0, d / "point.nc")
     with xr.open_dataset(d / "point.nc") as ds:
         return ds.load()
 

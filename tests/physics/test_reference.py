@@ -1,4 +1,4 @@
-"""Reference Hugoniot from equilibrium NVT MD (``hugomap.analysis.reference``).
+"""Reference Hugoniot from equilibrium NVT MD (``hugomap.md.reference``).
 
 (a) block averaging gives the right standard error for white noise and AR(1) series;
 (b) Hugoniot points of the supercritical LJ fluid (pole ρ0 = 0.8, T0 = 2.0) satisfy the
@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from hugomap.analysis import reference as ref
+from hugomap.md import reference as ref
 from hugomap.md.potential import LJParams
 from hugomap.md.simulation import SolverUnstable
 

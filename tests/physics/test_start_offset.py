@@ -17,7 +17,7 @@ import pytest
 import xarray as xr
 import yaml
 
-from hugomap import pipeline, pipeline_window
+from hugomap import stages
 from hugomap.config import validate_config
 from hugomap.md.window import MDWindow
 
@@ -36,12 +36,12 @@ def _scene(offset: float) -> dict:
 
 def test_offset_window_is_the_same_window_in_a_shifted_frame(tmp_path: Path) -> None:
     scene = _scene(0.0)
-    pipeline.prepare_sample(scene, tmp_path / "sample.nc")
-    pipeline.load_to_target_stage(tmp_path / "sample.nc", scene, UP, tmp_path / "loaded.nc")
+    stages.prepare_sample(scene, tmp_path / "sample.nc")
+    stages.load_to_target(tmp_path / "sample.nc", scene, UP, tmp_path / "loaded.nc")
     wins = {}
     for eps in (0.0, EPS):
         out = tmp_path / f"window_{eps:g}.nc"
-        pipeline_window.window_start(tmp_path / "loaded.nc", _scene(eps), UP, out)
+        stages.window_start(tmp_path / "loaded.nc", _scene(eps), UP, out)
         with xr.open_dataset(out) as ds:
             ds.load()
         assert ds.attrs["status"] == "ok", ds.attrs.get("diagnostic")

@@ -23,7 +23,7 @@ from hugomap.config import ConfigError, validate_config
 from hugomap.figures import stability_map_figure
 from hugomap.io.atomic import write_netcdf
 from hugomap.io.dataset import point_dataset
-from hugomap.pipeline import aggregate
+from hugomap.stages import aggregate
 from hugomap.status import FAILURES
 
 C0, S = 3940.0, 1.49

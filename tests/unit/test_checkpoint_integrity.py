@@ -20,7 +20,7 @@ import pytest
 import xarray as xr
 import yaml
 
-from hugomap import pipeline
+from hugomap import stages
 from hugomap.config import validate_config
 from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
@@ -257,9 +257,9 @@ def piston_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
     d = tmp_path_factory.mktemp("piston")
     scene, u_p = _scene(), 2.5
     with one_numba_thread():
-        pipeline.prepare_sample(scene, d / "sample.nc")
-        loaded = pipeline.load_to_target_stage(d / "sample.nc", scene, u_p, d / "loaded.nc")
-        ref = pipeline.piston_point(loaded, scene, u_p, d / "ref.nc")
+        stages.prepare_sample(scene, d / "sample.nc")
+        loaded = stages.load_to_target(d / "sample.nc", scene, u_p, d / "loaded.nc")
+        ref = stages.piston_point(loaded, scene, u_p, d / "ref.nc")
         assert not Path(str(ref) + ".part.nc").exists()  # removed once the point is written
         real_drive = pipeline.drive
 
@@ -277,7 +277,7 @@ def piston_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
         pipeline.drive = killed_drive
         try:
             with pytest.raises(Killed):
-                pipeline.piston_point(loaded, scene, u_p, d / "killed.nc")
+                stages.piston_point(loaded, scene, u_p, d / "killed.nc")
         finally:
             pipeline.drive = real_drive
     part = d / "killed.nc.part.nc"
@@ -316,7 +316,7 @@ def _rerun(run: dict, part: Path | None, monkeypatch, caplog) -> tuple[Path, lis
     monkeypatch.setattr(pipeline, "drive", spy)
     caplog.clear()
     with caplog.at_level(logging.INFO, logger="hugomap"), one_numba_thread():
-        pipeline.piston_point(run["loaded"], run["scene"], run["u_p"], out)
+        stages.piston_point(run["loaded"], run["scene"], run["u_p"], out)
     assert not mine.exists() and not stray.exists()
     assert fresh.exists()
     fresh.unlink()
@@ -413,6 +413,6 @@ def test_corrupted_loading_checkpoint_fails_the_point(piston_run: dict, tmp_path
     out = tmp_path / "point.nc"
     shutil.copy(piston_run["part"], Path(str(out) + ".part.nc"))
     with pytest.raises(CheckpointError, match="checksum mismatch") as info:
-        pipeline.piston_point(loaded, piston_run["scene"], piston_run["u_p"], out)
+        stages.piston_point(loaded, piston_run["scene"], piston_run["u_p"], out)
     assert str(loaded) in str(info.value)
     assert not out.exists()

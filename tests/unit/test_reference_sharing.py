@@ -16,7 +16,7 @@ import yaml
 
 from hugomap.config import reference_inputs, reference_key, validate_config
 from hugomap.io.atomic import write_netcdf
-from hugomap.pipeline import reference_stage
+from hugomap.stages import reference_stage
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -73,7 +73,7 @@ def test_shared_reference_is_copied_only_for_the_same_inputs(tmp_path: Path) -> 
 
 
 def test_dry_run_computes_one_reference_for_scenes_that_share_it(tmp_path: Path) -> None:
-    """Two scenes that differ only in the window share one md_reference job; a third at
+    """Two scenes that differ only in the window share one shared_reference job; a third at
     another T0 gets its own."""
     base = _tiny_scene()
     wide = copy.deepcopy(base)
@@ -87,8 +87,8 @@ def test_dry_run_computes_one_reference_for_scenes_that_share_it(tmp_path: Path)
            str(tmp_path), "--configfile", str(path), "--cores", "1", "-n"]  # fmt: skip
     r = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path, timeout=300)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
-    counts = dict(re.findall(r"^(md_reference|reference)\s+(\d+)$", r.stdout, re.M))
-    assert counts == {"md_reference": "2", "reference": "3"}, r.stdout[-2000:]
+    counts = dict(re.findall(r"^(shared_reference|reference)\s+(\d+)$", r.stdout, re.M))
+    assert counts == {"shared_reference": "2", "reference": "3"}, r.stdout[-2000:]
     keys = {reference_key(_resolved(s)) for s in (base, wide, hot)}
     assert len(keys) == 2
     for key in keys:

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from hugomap import pipeline_sph as ps
+from hugomap import stages as ps
 from hugomap.config import validate_config
 from hugomap.sph.window import SPHWindow
 from hugomap.status import FAILURES
@@ -52,7 +52,7 @@ def window0(tmp_path_factory) -> tuple[Path, float]:
     d = tmp_path_factory.mktemp("sph_window")
     scene = _scene()
     ps.prepare_sample(scene, d / "sample.nc")
-    ps.load_to_target_stage(d / "sample.nc", scene, UP, d / "loaded.nc")
+    ps.load_to_target(d / "sample.nc", scene, UP, d / "loaded.nc")
     ps.window_start(d / "loaded.nc", scene, UP, d / "window.nc")
     ds = xr.load_dataset(d / "window.nc")
     assert ds.attrs["status"] == "ok", ds.attrs.get("diagnostic")

@@ -257,7 +257,7 @@ def test_crashed_preparation(tmp_path: Path) -> None:
 
 
 def _window(path: Path, status: str = "ok", diagnostic: str = "") -> None:
-    """A stand-in for the window checkpoint (pipeline_window.window_start): its attributes."""
+    """A stand-in for the window checkpoint (stages.window_start): its attributes."""
     attrs = {"stage": "window", "status": status}
     if status == "ok":
         _checkpoint(path, **attrs, window_state=json.dumps({"u_out": -1.0}))

@@ -1,8 +1,12 @@
 """Shock-front tracking, shocked-state averaging and the Rankine–Hugoniot jump conditions.
 
-Frame: the piston frame of ``window.piston`` (piston wall at rest at x_L, shocked material
-near rest, upstream material flowing in at u_a ≈ −u_p, front moving at +(D − u_p)).
-Reduced LJ units (σ, τ, ε; m = 1).
+One analysis for every backend and scheme: the front is tracked on the per-bin flow velocity,
+the states behind and ahead of it are slabs of whole bins read by the backend's ``Profile``
+(neutral fields ρ, u, P = P_xx, P_yy, P_zz, E, T in the backend's units), and the point is
+measured from the samples of a run (a piston's drive, a window's steady average) by
+``measure_point``. Velocities are in the simulation frame; ``u_ahead`` (the upstream material's
+velocity) and ``u_behind`` (the shocked material's, set by the piston or the window's outflow)
+are known exactly, so D = (front speed) − u_ahead and u_p = u_behind − u_ahead.
 
 Jump conditions across a steady front moving at D into material at rest (Zel'dovich &
 Raizer, ch. I §17), with u_p the particle-velocity jump and V = 1/ρ:
@@ -16,7 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..md.profiles import fields_from_sums
+from ..states import Pole, Profile
+from .stats import CorrelatedSlope, block_average, robust_slope
 
 
 def front_position(
@@ -65,27 +70,31 @@ def front_position(
     return float(x_edges[sel[lo]] + np.sum(w[lo:hi] * frac))
 
 
-def region_sums(
-    sums: np.ndarray, x_edges: np.ndarray, x_lo: float, x_hi: float
-) -> tuple[np.ndarray, int]:
-    """Sum the raw bin sums (nbins, 11) of the bins lying wholly inside [x_lo, x_hi]."""
-    inside = (x_edges[:-1] >= x_lo) & (x_edges[1:] <= x_hi)
-    return sums[inside].sum(axis=0), int(inside.sum())
-
-
-def region_state(
-    sums: np.ndarray, x_edges: np.ndarray, x_lo: float, x_hi: float, area: float
-) -> dict[str, float]:
-    """Mean state of the slab [x_lo, x_hi] (whole bins): n, ux, Pxx, Pyy, Pzz, T, e.
-
-    The bins are merged before the fields are formed, so the mean velocity removed is the
-    region's (see ``md.profiles``)."""
-    s, nb = region_sums(sums, x_edges, x_lo, x_hi)
+def slab_state(
+    profile: Profile, sums: np.ndarray, edges: np.ndarray, x_lo: float, x_hi: float
+) -> dict[str, float] | None:
+    """Neutral state of the bins lying wholly inside [x_lo, x_hi] (their sums added up
+    first, then read by ``profile.state``); None if no bin is inside."""
+    inside = (edges[:-1] >= x_lo) & (edges[1:] <= x_hi)
+    nb = int(inside.sum())
     if nb == 0:
-        return {k: float("nan") for k in ("n", "ux", "Pxx", "Pyy", "Pzz", "T", "e")}
-    width = float(x_edges[1] - x_edges[0])
-    out = fields_from_sums(s[None, :], area * width * nb)
-    return {k: float(v[0]) for k, v in out.items()}
+        return None
+    return profile.state(sums[inside].sum(axis=0), nb)
+
+
+def bin_edges(profile: Profile, nbins: int) -> np.ndarray:
+    """Bin edges x0 + k·width, k = 0..nbins."""
+    return profile.x0 + np.arange(nbins + 1) * profile.bin_width
+
+
+def track_front(
+    profile: Profile, sums: np.ndarray, x_lo: float, x_hi: float, u_behind: float,
+    u_ahead: float,
+) -> float:  # fmt: skip
+    """The front in one profile sample (``front_position`` on the bins' flow velocity)."""
+    u, count = profile.velocity(sums)
+    return front_position(u, count, bin_edges(profile, sums.shape[0]), x_lo, x_hi,
+                          u_behind, u_ahead)  # fmt: skip
 
 
 def jump_residuals(
@@ -142,157 +151,153 @@ def jump_residual_errors(
     return {k: float(np.sqrt(v)) for k, v in var.items()}
 
 
-def analyse_piston(
+# Rules of the point measurement, the same for every backend and scheme.
+N_BLOCKS = 8  # block averages over the samples (stats.block_average)
+MIN_SLAB_BINS = 3  # a slab narrower than this many bins is not measured in that sample
+TWO_WAVE_SIGMAS = 5.0  # a precursor's P_xx jump must exceed this many standard errors…
+TWO_WAVE_FRACTION = 0.03  # …and this fraction of the main jump P − P0
+
+
+def residual_text(values: dict) -> str:
+    """The three jump residuals as a one-line diagnostic."""
+    return "jump residuals: " + ", ".join(
+        f"{k} {values['residual_' + k]:+.3%}" for k in ("mass", "momentum", "energy")
+    )
+
+
+def measure_point(
     h: dict[str, np.ndarray],
-    pole: dict[str, float],
-    area: float,
-    bin_width: float,
+    profile: Profile,
+    pole: Pole,
+    u_behind: float,
+    u_ahead: float,
     gap: float,
-    n_blocks: int = 8,
-    residual_tol: float = 0.03,
-    min_region: float = 3.0,
-    avg_length: float | None = None,
-    u_upstream: float | None = None,
-    u_piston: float | None = None,
-    precursor_sigmas: float = 5.0,
-    precursor_fraction: float = 0.03,
+    avg_length: float,
+    residual_tol: float,
+    left_gap: float | None = None,
     front_speed: tuple[float, float] | None = None,
+    n_blocks: int = N_BLOCKS,
 ) -> dict[str, float | str | bool]:
-    """One Hugoniot point from the drive-stage samples of a piston run.
+    """One Hugoniot point from the samples of a run (module docstring).
 
-    ``front_speed`` (speed, standard error) in the samples' frame replaces the tracked
-    front's slope in D when given (a moving window's L dω/dt: the mass balance of the whole
-    window, which a broad weak front does not blur); the tracked slope is then kept as
-    ``D_front`` as a check.
-
-    ``h`` holds the history arrays of ``window.piston.History``; ``pole`` the initial state
-    (rho0, P0, E0 and their errors). For each drive sample, the shocked slab is
-    [max(x_L + gap, x_f − gap − avg_length), x_f − gap] — the most recently shocked material:
-    the material shocked first keeps the entropy of the piston's start-up transient — the
-    slab ahead of the front [x_f + gap, x_f + gap + avg_length] and the upstream slab
-    [x_f + gap, x_R − gap] (whole bins). Then
-      D_w = d x_f/dt (Theil–Sen fit over the drive samples), u_a, u_s = upstream and shocked mean
-      x velocities, D = D_w − u_a, u_p = u_s − u_a (both relative to the upstream material),
-      ρ, P = P_xx, E = e, T: block averages over the samples of the shocked slab's state.
-    When the upstream velocity ``u_upstream`` is known exactly (the piston removes the sample's
-    drift), it replaces the measured u_a, whose thermal noise √(T/N) would otherwise enter D
-    and u_p; when the piston velocity ``u_piston`` is given too, u_p = u_piston − u_upstream
-    (a steady shocked state moves with the piston). The measured jump u_s − u_a is always
-    returned as ``u_p_measured``.
-
-    Two waves: in a crystal an elastic precursor can run ahead of the tracked (plastic) front.
-    Its state is the one ahead of the front; it is flagged (``two_wave`` = 1) when its P_xx
-    differs from P0 by more than ``precursor_sigmas`` standard errors and more than
-    ``precursor_fraction`` of P − P0, and the jump conditions are then checked across the
-    tracked front from that state (``ahead_*``) instead of from the pole.
-    Converged when every |jump residual| ≤ ``residual_tol`` and the fit has at least
-    2·n_blocks samples; ``residual_*_err`` are the residuals' propagated standard errors.
+    ``h``: per sample t, front (tracked, NaN where none), x_left, x_right (the boundaries
+    behind and ahead) and the raw profile sums (nsamples, nbins, nfields) read by ``profile``.
+    For each sample the slab behind the front is [max(x_left + left_gap, x_f − gap −
+    avg_length), x_f − gap] (``left_gap`` defaults to ``gap``: the most recently shocked
+    material, clear of the piston or the outflow edge) and the slab ahead [x_f + gap,
+    min(x_right − gap, x_f + gap + avg_length)]; a slab narrower than ``MIN_SLAB_BINS`` bins
+    is skipped in that sample. Then
+      D = D_w − u_ahead, D_w the front speed: the Theil–Sen slope of x_f(t) (robust to a
+        tracker that now and then jumps), its standard error that of the least-squares slope
+        corrected for correlated samples (``stats.CorrelatedSlope``); a window passes its
+        L dω/dt as ``front_speed`` (speed, error), and the tracked D is kept as ``D_front``;
+      u_p = u_behind − u_ahead (exact: set by the piston or the outflow), and the shocked
+        slab's velocity relative to the upstream material as ``u_p_measured``;
+      every field of the slabs: block averages over the samples (``N_BLOCKS`` blocks) with
+        standard errors; the slab ahead as ``ahead_*`` (its u relative to the upstream).
+    Two waves: when the state ahead carries a P_xx jump from P0 larger than
+    ``TWO_WAVE_SIGMAS`` of its error and ``TWO_WAVE_FRACTION`` of P − P0 (an elastic
+    precursor), ``two_wave`` = 1 and the jump conditions are taken from that state instead of
+    the pole. Residuals (``jump_residuals``) with first-order propagated errors
+    (``jump_residual_errors``). Status: ``ok`` when D, u_p, ρ, P, E are finite, at least
+    max(2 n_blocks, half the samples) have a slab behind the front and every |residual| ≤
+    ``residual_tol``; ``not_converged`` when a residual is larger; else
+    ``too_few_samples``. ``diagnostic`` says why a point is not ok.
     """
-    from .stats import block_average, line_fit, robust_slope
+    t = np.asarray(h["t"], dtype=float)
+    xf = np.asarray(h["front"], dtype=float)
+    xl = np.asarray(h["x_left"], dtype=float)
+    xr = np.asarray(h["x_right"], dtype=float)
+    sums = np.asarray(h["sums"], dtype=float)
+    n = t.size
+    edges = bin_edges(profile, sums.shape[1] if sums.ndim == 3 else 0)
+    min_len = MIN_SLAB_BINS * profile.bin_width - 1e-9 * profile.bin_width
+    lg = gap if left_gap is None else left_gap
+    behind: list[dict | None] = []
+    ahead: list[dict | None] = []
+    for i in range(n):
+        st = sa = None
+        if np.isfinite(xf[i]):
+            lo, hi = max(xl[i] + lg, xf[i] - gap - avg_length), xf[i] - gap
+            if hi - lo >= min_len:
+                st = slab_state(profile, sums[i], edges, lo, hi)
+            a_lo, a_hi = xf[i] + gap, min(xr[i] - gap, xf[i] + gap + avg_length)
+            if a_hi - a_lo >= min_len:
+                sa = slab_state(profile, sums[i], edges, a_lo, a_hi)
+        behind.append(st)
+        ahead.append(sa)
+    keys = next((list(s) for s in behind + ahead if s is not None), ["rho", "u", "P", "E"])
 
-    drive = h["stage"] == 1
-    t = h["t"][drive]
-    xf = h["front"][drive]
-    xl = h["x_left"][drive]
-    xr = h["x_right"][drive]
-    sums = h["sums"][drive]
-    nbins = sums.shape[1] if sums.ndim == 3 else 0
-    edges = np.arange(nbins + 1) * bin_width
-    keys = ("n", "ux", "Pxx", "Pyy", "Pzz", "T", "e")
-    nan_state = {k: np.nan for k in keys}
-    shocked = {k: [] for k in keys}
-    ahead = {k: [] for k in keys}
-    upstream_u = []
-    length = avg_length if avg_length is not None else np.inf
-    for i in range(t.size):
-        lo, hi = max(xl[i] + gap, xf[i] - gap - length), xf[i] - gap
-        a_lo, a_hi = xf[i] + gap, min(xr[i] - gap, xf[i] + gap + length)
-        ok = np.isfinite(xf[i]) and hi - lo >= min_region
-        st = region_state(sums[i], edges, lo, hi, area) if ok else nan_state
-        ok_a = np.isfinite(xf[i]) and a_hi - a_lo >= min_region
-        st_a = region_state(sums[i], edges, a_lo, a_hi, area) if ok_a else nan_state
-        for k in keys:
-            shocked[k].append(st[k])
-            ahead[k].append(st_a[k])
-        upstream_u.append(
-            region_state(sums[i], edges, xf[i] + gap, xr[i] - gap, area)["ux"] if ok else np.nan
-        )
-    # Theil–Sen slope (robust to tracker jumps), with the least-squares standard error.
-    _, _, D_w_err, _ = line_fit(t, xf)
-    D_w = robust_slope(t, xf)
+    def series(states: list[dict | None], k: str) -> np.ndarray:
+        return np.array([np.nan if s is None else s[k] for s in states], dtype=float)
+
     out: dict[str, float | str | bool] = {}
+    D_w = robust_slope(t, xf)
+    _, D_w_err, _ = CorrelatedSlope().fit(t, xf)
     if front_speed is not None:
-        out["D_front"], out["D_front_err"] = D_w - (u_upstream or 0.0), D_w_err
+        out["D_front"], out["D_front_err"] = D_w - u_ahead, float(D_w_err)
         D_w, D_w_err = front_speed
-    u_a, u_a_err = block_average(np.asarray(upstream_u), n_blocks)
-    u_s, u_s_err = block_average(np.asarray(shocked["ux"]), n_blocks)
-    out["u_p_measured"], out["u_p_measured_err"] = u_s - u_a, float(np.hypot(u_s_err, u_a_err))
-    if u_upstream is not None:
-        u_a, u_a_err = float(u_upstream), 0.0
-    D = D_w - u_a
-    if u_piston is not None and u_upstream is not None:
-        u_p, u_p_err = float(u_piston) - u_a, 0.0
-    else:
-        u_p, u_p_err = u_s - u_a, float(np.hypot(u_s_err, u_a_err))
-    out["D"], out["D_err"] = D, float(np.hypot(D_w_err, u_a_err))
-    out["u_p"], out["u_p_err"] = u_p, u_p_err
-    for key, name in (
-        ("n", "rho"),
-        ("Pxx", "P"),
-        ("Pyy", "Pyy"),
-        ("Pzz", "Pzz"),
-        ("T", "T"),
-        ("e", "E"),
-    ):
-        out[name], out[name + "_err"] = block_average(np.asarray(shocked[key]), n_blocks)
-    for key, name in (("n", "rho"), ("Pxx", "P"), ("e", "E"), ("ux", "u")):
-        out["ahead_" + name], out["ahead_" + name + "_err"] = block_average(
-            np.asarray(ahead[key]), n_blocks
-        )
-    out["ahead_u"] = out["ahead_u"] - u_a  # in the frame of the pole material
+    D, D_err = float(D_w - u_ahead), float(D_w_err)
+    u_p = float(u_behind - u_ahead)
+    out["D"], out["D_err"] = D, D_err
+    out["u_p"], out["u_p_err"] = u_p, 0.0
+    u_s, u_s_err = block_average(series(behind, "u"), n_blocks)
+    out["u_p_measured"], out["u_p_measured_err"] = u_s - u_ahead, u_s_err
+    for k in keys:
+        if k == "u":
+            continue
+        out[k], out[k + "_err"] = block_average(series(behind, k), n_blocks)
+    for k in keys:
+        if k in ("T", "Pyy", "Pzz"):
+            continue
+        out["ahead_" + k], out["ahead_" + k + "_err"] = block_average(series(ahead, k), n_blocks)
+    out["ahead_u"] = out["ahead_u"] - u_ahead  # in the frame of the pole material
     rho, P, E = out["rho"], out["P"], out["E"]
+    P0, P0_err = pole.P0, pole.P0_err
     out["V"] = 1.0 / rho
     out["V_err"] = out["rho_err"] / rho**2
-    out["P_rh"] = pole["P0"] + pole["rho0"] * D * u_p
-    out["P_rh_err"] = float(
-        pole["rho0"] * np.hypot(out["D_err"] * u_p, D * out["u_p_err"]) + pole.get("P0_err", 0.0)
-    )
-    out["E_minus_E0"] = E - pole["E0"]
-    out["E_minus_E0_err"] = float(np.hypot(out["E_err"], pole.get("E0_err", 0.0)))
+    out["P_rh"] = P0 + pole.rho0 * D * u_p
+    out["P_rh_err"] = float(pole.rho0 * abs(u_p) * D_err + P0_err)
+    out["E_minus_E0"] = E - pole.E0
+    out["E_minus_E0_err"] = float(np.hypot(out["E_err"], pole.E0_err))
     out["shear_stress"] = 0.5 * (P - 0.5 * (out["Pyy"] + out["Pzz"]))
-    dP_ahead = out["ahead_P"] - pole["P0"]
-    dP_ahead_err = float(np.hypot(out["ahead_P_err"], pole.get("P0_err", 0.0)))
+    dP_ahead = out["ahead_P"] - P0
+    dP_ahead_err = float(np.hypot(out["ahead_P_err"], P0_err))
     two_wave = bool(
         np.isfinite(dP_ahead)
-        and abs(dP_ahead) > precursor_sigmas * dP_ahead_err
-        and abs(dP_ahead) > precursor_fraction * abs(P - pole["P0"])
+        and abs(dP_ahead) > TWO_WAVE_SIGMAS * dP_ahead_err
+        and abs(dP_ahead) > TWO_WAVE_FRACTION * abs(P - P0)
     )
     out["two_wave"] = float(two_wave)
     vals = {"D": D, "u": u_p, "rho": rho, "P": P, "E": E}
-    errs = {"D": out["D_err"], "u": u_p_err, "rho": out["rho_err"], "P": out["P_err"]}
-    errs["E"] = out["E_err"]
+    errs = {"D": D_err, "u": 0.0, "rho": out["rho_err"], "P": out["P_err"], "E": out["E_err"]}
     if two_wave:
-        vals.update(rho1=out["ahead_rho"], P1=out["ahead_P"], E1=out["ahead_E"])
-        vals["u1"] = out["ahead_u"]
+        vals.update(rho1=out["ahead_rho"], P1=out["ahead_P"], E1=out["ahead_E"],
+                    u1=out["ahead_u"])  # fmt: skip
         for k, a in (("rho1", "rho"), ("P1", "P"), ("E1", "E"), ("u1", "u")):
             errs[k] = out[f"ahead_{a}_err"]
     else:
-        vals.update(rho1=pole["rho0"], P1=pole["P0"], E1=pole["E0"], u1=0.0)
-        for k, a in (("rho1", "rho0"), ("P1", "P0"), ("E1", "E0")):
-            errs[k] = pole.get(a + "_err", 0.0)
+        vals.update(rho1=pole.rho0, P1=P0, E1=pole.E0, u1=0.0)
+        errs.update(rho1=pole.rho0_err, P1=P0_err, E1=pole.E0_err)
     res = jump_residuals(**vals)
     out.update({f"residual_{k}": v for k, v in res.items()})
     res_err = jump_residual_errors(vals, errs)
     out.update({f"residual_{k}_err": v for k, v in res_err.items()})
-    n_ok = int(np.isfinite(np.asarray(shocked["n"])).sum())
+    n_ok = int(np.isfinite(series(behind, "rho")).sum())
     out["n_samples"] = n_ok
     finite = all(np.isfinite(v) for v in (D, u_p, rho, P, E))
-    converged = bool(
-        finite and n_ok >= 2 * n_blocks and all(abs(v) <= residual_tol for v in res.values())
-    )
+    enough = n_ok >= max(2 * n_blocks, n // 2)
+    converged = bool(finite and enough and all(abs(v) <= residual_tol for v in res.values()))
     out["converged"] = converged
-    if not finite or n_ok < 2 * n_blocks:
+    if not (finite and enough):
         out["status"] = "too_few_samples"
+        out["diagnostic"] = (
+            f"{n_ok} of {n} samples have a slab of at least {MIN_SLAB_BINS} bins behind the "
+            f"front (median front {np.nanmedian(xf) if np.isfinite(xf).any() else np.nan:.4g},"
+            f" boundaries {np.median(xl):.4g} .. {np.median(xr):.4g}); needs "
+            f"{max(2 * n_blocks, n // 2)}"
+        )
     else:
         out["status"] = "ok" if converged else "not_converged"
+        out["diagnostic"] = "" if converged else residual_text(out)
     return out

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import subprocess
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import netCDF4
@@ -67,10 +68,10 @@ ERR_SUFFIX = "_err"
 ALWAYS_WITH_ERR = ("D", "u_p_measured", "rho", "V", "P", "E", "E_minus_E0",
                    "residual_mass", "residual_momentum", "residual_energy")  # fmt: skip
 
-# -- units per solver ---------------------------------------------------------------------
-# MD writes Lennard-Jones reduced units (the tables above, unchanged); CSPH writes SI. The
-# CSPH tables are the MD ones with every unit translated and "number density"/"per atom"
-# read as mass density/per unit mass, plus the variables only a continuum solver has.
+# -- unit tables ---------------------------------------------------------------------------
+# The tables above are in Lennard-Jones reduced units; a backend in SI translates every unit
+# and reads "number density"/"per atom" as mass density/per unit mass, and adds the
+# variables only it has. A backend hands its table to the functions below.
 SI_UNITS = {
     "sigma tau^-1": "m s^-1", "sigma^-3": "kg m^-3", "sigma^3": "m^3 kg^-1", P_UNIT: "Pa",
     "epsilon k_B^-1": "K", "epsilon": "J kg^-1", "tau": "s", "sigma": "m", "tau^-1": "s^-1",
@@ -79,12 +80,26 @@ _SI_TEXT = (
     ("number density", "mass density"), ("(per atom, m = 1)", "(per unit mass)"),
     ("(per atom)", "(per unit mass)"), ("atoms x time steps", "particles x time steps"),
 )  # fmt: skip
-CSPH_EXTRA_VARS: dict[str, tuple[str, str]] = {
-    "P_eos": ("Pa", "EOS (mean) pressure behind the front; P = P_eos - S_xx adds the deviator"),
-    "ahead_P_eos": ("Pa", "EOS pressure just ahead of the tracked front"),
-    "eps_p": ("1", "mass-mean accumulated plastic strain behind the front"),
-    "ahead_eps_p": ("1", "mass-mean accumulated plastic strain just ahead of the front"),
+PROFILE_VARS: dict[str, tuple[str, str]] = {
+    "x": ("sigma", "bin centre (window frame)"),
+    "rho": ("sigma^-3", "steady profile: number density"),
+    "u": ("sigma tau^-1", "steady profile: mean x velocity (window frame)"),
+    "P": (P_UNIT, "steady profile: longitudinal stress P_xx"),
+    "T": ("epsilon k_B^-1", "steady profile: temperature"),
 }
+
+
+@dataclass(frozen=True)
+class UnitTable:
+    """Names, units and long names of a backend's dataset variables: ``point`` (a Hugoniot
+    point's scalars), ``pole``, ``profile`` (the steady window profile) and the ``axes``
+    units of ``velocity``, ``time``, ``length``; ``system`` names the unit system."""
+
+    point: dict[str, tuple[str, str]]
+    pole: dict[str, tuple[str, str]]
+    profile: dict[str, tuple[str, str]]
+    axes: dict[str, str]
+    system: str
 
 
 def _si(table: dict[str, tuple[str, str]]) -> dict[str, tuple[str, str]]:
@@ -96,23 +111,17 @@ def _si(table: dict[str, tuple[str, str]]) -> dict[str, tuple[str, str]]:
     return out
 
 
-def solver_tables(solver: str = "md") -> tuple[dict, dict, dict[str, str]]:
-    """(point variables, pole variables, axis units) of a solver's point files: the MD
-    tables (LJ reduced units) for ``md``, SI ones for ``csph``. Axis units: ``velocity``,
-    ``time``, ``length``."""
-    if solver == "csph":
-        axes = {"velocity": "m s^-1", "time": "s", "length": "m"}
-        return {**_si(POINT_VARS), **CSPH_EXTRA_VARS}, _si(POLE_VARS), axes
-    return POINT_VARS, POLE_VARS, {"velocity": "sigma tau^-1", "time": "tau", "length": "sigma"}
+def lj_units() -> UnitTable:
+    """Lennard-Jones reduced units (σ, ε, m, τ = σ√(m/ε), k_B = 1)."""
+    axes = {"velocity": "sigma tau^-1", "time": "tau", "length": "sigma"}
+    return UnitTable(POINT_VARS, POLE_VARS, PROFILE_VARS, axes, "LJ reduced")
 
 
-def _solver_of(scene_config: dict | str | None) -> str:
-    if isinstance(scene_config, str):
-        try:
-            scene_config = json.loads(scene_config)
-        except ValueError:
-            return "md"
-    return str((scene_config or {}).get("solver", "md"))
+def si_units(extra: dict[str, tuple[str, str]] | None = None) -> UnitTable:
+    """SI units (m, s, kg, Pa, J/kg, K), with a backend's ``extra`` point variables."""
+    axes = {"velocity": "m s^-1", "time": "s", "length": "m"}
+    return UnitTable({**_si(POINT_VARS), **(extra or {})}, _si(POLE_VARS), _si(PROFILE_VARS),
+                     axes, "SI (m, s, kg)")  # fmt: skip
 
 
 POINT_TEXT = {
@@ -160,11 +169,11 @@ def provenance_attrs(config: dict | None) -> dict[str, str]:
     }
 
 
-def control_vars(history, time_unit: str, velocity_unit: str) -> dict:
+def control_vars(history, units: UnitTable) -> dict:
     """The control loop's record (``window.methods.ControlHistory``) as dataset variables:
     per averaging window k ``control_{t, a, a_err, omega, u_in, u_out, du}`` and the raw ω
-    samples ``omega_t``, ``omega_value``, in the solver's units (e.g. "tau", "sigma tau^-1";
-    "s", "m s^-1")."""
+    samples ``omega_t``, ``omega_value``, in the backend's units."""
+    time_unit, velocity_unit = units.axes["time"], units.axes["velocity"]
     a = history.arrays()
     names = {
         "t": (time_unit, "end of averaging window k"),
@@ -182,6 +191,14 @@ def control_vars(history, time_unit: str, velocity_unit: str) -> dict:
     return out
 
 
+def profile_vars(profile: dict[str, np.ndarray], units: UnitTable) -> dict:
+    """The steady window profile (``window.steady.mean_profile``) as ``profile_*`` variables
+    along ``bin``; fields without a unit in the table are left out."""
+    return {f"profile_{k}": ("bin", v, {"units": units.profile[k][0],
+                                        "long_name": units.profile[k][1]})
+            for k, v in profile.items() if k in units.profile}  # fmt: skip
+
+
 def point_dataset(
     values: dict,
     pole: dict,
@@ -191,10 +208,11 @@ def point_dataset(
     status: str,
     diagnostic: str,
     scene_config: dict,
+    units: UnitTable,
 ) -> xr.Dataset:
-    """One Hugoniot point as a Dataset (NaN-filled where a failed run has no value); units
-    from the scene's solver (``solver_tables``)."""
-    point_vars, pole_vars, axes = solver_tables(_solver_of(scene_config))
+    """One Hugoniot point as a Dataset (NaN-filled where a failed run has no value), in the
+    backend's ``units``."""
+    point_vars, pole_vars, axes = units.point, units.pole, units.axes
     vals = {k: values.get(k, np.nan) for k in point_vars}
     vals.update(
         {
@@ -256,8 +274,10 @@ def aggregate_points(
     reference: xr.Dataset | None,
     config: dict,
     scene: str,
+    units: UnitTable,
 ) -> xr.Dataset:
-    """Join point files into one dataset with dims ``scheme`` × ``u_p``.
+    """Join point files into one dataset with dims ``scheme`` × ``u_p``, in the backend's
+    ``units``.
 
     Each file is opened once, its scalars read and the file closed, so memory is the
     aggregate itself (about 70 numbers per point) and one open file, for any number of
@@ -277,7 +297,7 @@ def aggregate_points(
         rows.append(values)
         if i == 0:
             first_attrs = gattrs
-    point_vars, pole_vars, axes = solver_tables(_solver_of(first_attrs.get("scene_config")))
+    point_vars, pole_vars, axes = units.point, units.pole, units.axes
     keep = [
         k for k in (*point_vars, *(k + ERR_SUFFIX for k in point_vars)) if k != "piston_velocity"
     ]

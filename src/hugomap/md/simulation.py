@@ -322,6 +322,11 @@ class MDSimulation:
     def n_particles(self) -> int:
         return self.state.n
 
+    @property
+    def steps(self) -> int:
+        """Time steps taken since the run began (the step counter of the state)."""
+        return int(self.state.step)
+
     def _thermo_numbers(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
         nf = 3 * self.state.n - (3 if self.state.periodic.all() else 0)
         if self.T_bath is None:

@@ -383,6 +383,11 @@ class MDWindow:
     def n_particles(self) -> int:
         return int(np.count_nonzero(self.sim.state.ids >= 0))
 
+    @property
+    def steps(self) -> int:
+        """Time steps of the simulation inside."""
+        return self.sim.steps
+
     def advance(self, n_steps: int) -> None:
         """Advance ``n_steps`` (rounded up to whole boundary updates of ``sync_steps``)."""
         k = self.geom.sync_steps

@@ -164,6 +164,11 @@ class SPHWindow:
         return self.sim.dt
 
     @property
+    def steps(self) -> int:
+        """Time steps of the simulation inside."""
+        return int(self.sim.steps)
+
+    @property
     def n_particles(self) -> int:
         f = self.sim.frozen
         return int(self.sim.state.n - (0 if f is None else np.count_nonzero(f)))

@@ -1,9 +1,8 @@
 """Moving-window methods, written once for every solver: the ω signal, AMW, MW, fixed runs for
 the dichotomy, and the steady-state measurement shared by all of them.
 
-The solver is any object with the window protocol (``md.window.MDWindow``): ``advance``,
-``time``, ``dt``, ``u_in``, ``u_out``, ``geom`` (x_lo, x_hi, length), ``area``,
-``galilean_shift``, ``set_outflow``, ``count_in_window`` and ``profile_sums``.
+The solver is any object with the window protocol (``window.protocol.WindowSolver``:
+``md.window.MDWindow``, ``sph.window.SPHWindow``, …).
 
 Front signal (SEED-en.md, reading notes). With the window [x_lo, x_hi] of length L holding
 upstream material (density ρ0, stress P0) ahead of the front x_f and shocked material (ρ1, P1)
@@ -29,8 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..analysis.shock import bin_edges
 from ..analysis.stats import CorrelatedSlope
-from ..md.profiles import fields_from_sums
 
 log = logging.getLogger("hugomap")
 
@@ -38,12 +37,15 @@ log = logging.getLogger("hugomap")
 @dataclass
 class OmegaSignal:
     """ω from the atom count (``kind`` = "N") or the longitudinal stress sum ("stress");
-    ``q_up``/``q_sh``: the value for a window full of upstream / shocked material."""
+    ``q_up``/``q_sh``: the value for a window full of upstream / shocked material. The stress
+    signal reads the window's profile through the backend's ``profile`` reader (bins of
+    ``bin_width``)."""
 
     kind: str
     q_up: float
     q_sh: float
     bin_width: float
+    profile: object | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.kind not in ("N", "stress"):
@@ -62,12 +64,18 @@ class OmegaSignal:
     def raw(self, solver) -> float:
         if self.kind == "N":
             return float(solver.count_in_window())
-        sums = solver.profile_sums(self.bin_width)
+        if self.profile is None:
+            raise ValueError("the stress omega signal needs the backend's profile reader")
+        sums = self.profile.sums(solver)
         w = self.bin_width
-        edges = np.arange(sums.shape[0] + 1) * w
+        edges = bin_edges(self.profile, sums.shape[0])
         inside = (edges[:-1] >= solver.geom.x_lo - 1e-9) & (edges[1:] <= solver.geom.x_hi + 1e-9)
-        f = fields_from_sums(sums[inside], solver.area * w)
-        return float(np.nansum(f["Pxx"]) * solver.area * w)
+        P = [self.profile.state(sums[i], 1)["P"] for i in np.nonzero(inside)[0]]
+        return float(np.nansum(P) * solver.area * w)
+
+    def to_json(self) -> dict:
+        return {"kind": self.kind, "q_up": self.q_up, "q_sh": self.q_sh,
+                "bin_width": self.bin_width}  # fmt: skip
 
     def __call__(self, solver) -> float:
         """ω = (x_f − x_lo)/L estimated from the signal (dimensionless)."""

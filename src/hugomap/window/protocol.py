@@ -1,8 +1,8 @@
 """The seam between shock methods and solvers.
 
-Methods (piston now; MW, AMW and the dichotomy next) talk to a solver only through this
-protocol, so they run unchanged on MD and, later, on SPH. Lengths, times and velocities are in
-the solver's own units (reduced LJ units for MD, SI for SPH).
+The methods (the piston driver, AMW, MW, the dichotomy's trials, the steady average) talk to a
+solver only through these protocols, so they run unchanged on every backend. Lengths, times
+and velocities are in the solver's own units (reduced LJ units for MD, SI for CSPH).
 """
 
 from __future__ import annotations
@@ -24,6 +24,10 @@ class ShockSolver(Protocol):
     def n_particles(self) -> int:
         """Particles in the domain."""
 
+    @property
+    def steps(self) -> int:
+        """Time steps taken since the run began."""
+
     def advance(self, n_steps: int) -> None:
         """Run ``n_steps`` of the solver's own time loop (raises SolverUnstable)."""
 
@@ -44,3 +48,37 @@ class ShockSolver(Protocol):
 
     def save(self, path: str | os.PathLike, extra=None, attrs=None) -> object:
         """The complete state, bit-exact on resume."""
+
+
+class WindowGeometry(Protocol):
+    """The observation window [x_lo, x_hi] in the window frame."""
+
+    x_lo: float
+    x_hi: float
+
+    @property
+    def length(self) -> float:
+        """x_hi − x_lo."""
+
+
+class WindowSolver(ShockSolver, Protocol):
+    """What the window methods (``window.methods``, ``window.steady``) need of a moving
+    window: the inflow velocity ``u_in`` at x_hi and the outflow velocity ``u_out`` at x_lo
+    (window frame), so that u_p = u_out − u_in; ``geom``; the transverse ``area``; the time
+    step ``dt``; the particle count inside the window (the ω signal); and ``set_outflow``
+    (MW's handle)."""
+
+    u_in: float
+    u_out: float
+    geom: WindowGeometry
+    area: float
+
+    @property
+    def dt(self) -> float:
+        """The solver's time step."""
+
+    def count_in_window(self) -> int:
+        """Mobile particles between x_lo and x_hi."""
+
+    def set_outflow(self, u_out: float) -> None:
+        """Set the outflow velocity (u_p = u_out − u_in changes, the inflow is held)."""

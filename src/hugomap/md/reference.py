@@ -46,9 +46,10 @@ import numpy as np
 import xarray as xr
 
 from .. import __version__
-from ..md.potential import LJParams
-from ..md.sample import fcc_state, maxwell_velocities
-from ..md.simulation import MDSimulation, MDState, SolverUnstable
+from ..analysis import stats
+from .potential import LJParams
+from .sample import fcc_state, maxwell_velocities
+from .simulation import MDSimulation, MDState, SolverUnstable
 
 # Default liquid pole (a supercritical fluid that stays fluid under compression, see
 # shared/FACTS.md "Choosing the Lennard-Jones pole") and compressions ρ/ρ0.
@@ -77,25 +78,15 @@ _UNITS = {
 
 # -- statistics ------------------------------------------------------------------------------
 def block_average(series: Sequence[float] | np.ndarray, n_blocks: int = 10) -> tuple[float, float]:
-    """Mean of a (correlated) time series and its standard error from block averaging.
-
-    The series is cut into ``n_blocks`` contiguous blocks of equal length b = ⌊n/n_blocks⌋
-    (the first n − n_blocks·b samples, the oldest, are dropped); with block means m_k,
-
-        mean = (1/n_b) Σ_k m_k,     SE = √( Σ_k (m_k − mean)² / (n_b (n_b − 1)) ).
-
-    The SE is right when a block is much longer than the series' correlation time (the
-    block means are then independent); it is itself uncertain by a factor ≈ 1/√(2(n_b − 1)).
-    Returns (mean, standard error) in the units of the series.
-    """
+    """``stats.block_average`` (mean and standard error of a correlated series, in its
+    units) with ``n_blocks`` blocks, refusing a run too short to fill them: the reference
+    is set up by its config, so too few samples is a config error, not a NaN error bar."""
     x = np.asarray(series, dtype=float).ravel()
     if n_blocks < 2:
         raise ValueError(f"n_blocks = {n_blocks}: need at least 2 blocks")
-    b = x.size // n_blocks
-    if b < 1:
+    if x.size < n_blocks:
         raise ValueError(f"{x.size} samples cannot fill {n_blocks} blocks")
-    means = x[x.size - b * n_blocks :].reshape(n_blocks, b).mean(axis=1)
-    return float(means.mean()), float(means.std(ddof=1) / math.sqrt(n_blocks))
+    return stats.block_average(x, n_blocks)
 
 
 def _derived_seed(*keys: int) -> int:
@@ -611,7 +602,7 @@ def _to_dataset(
             "H = E - E0 - (P + P0)(V0 - V)/2 = 0 is found by Newton/secant iterations on T "
             "(one fresh NVT run per iterate) until |H| < h_tol_sigma * sigma_H; "
             "u_p = sqrt((P - P0)(V0 - V)), D = V0 sqrt((P - P0)/(V0 - V)). Errors: block "
-            "averages, plus the uncertainty of the root T (hugomap.analysis.reference)."
+            "averages, plus the uncertainty of the root T (hugomap.md.reference)."
         ),
         n_atoms=n_atoms,
         cells=np.asarray(kw["cells"], dtype=np.int32),

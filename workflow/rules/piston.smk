@@ -1,4 +1,4 @@
-# Molecular-dynamics stages: sample, loading checkpoint, piston point, reference.
+# The stages every backend runs: sample, loading checkpoint, piston point, reference.
 
 
 wildcard_constraints:
@@ -15,8 +15,8 @@ rule prepare_sample:
         "../envs/hugomap.yaml"
     threads: config["threads"]
     resources:
-        mem_mb=md_mem_mb("prepare"),
-        runtime=md_runtime("prepare"),
+        mem_mb=stage_mem_mb("prepare"),
+        runtime=stage_runtime("prepare"),
     params:
         py=PY,
         scene=scene_json,
@@ -36,8 +36,8 @@ rule load_to_target:
         "../envs/hugomap.yaml"
     threads: config["threads"]
     resources:
-        mem_mb=md_mem_mb("load"),
-        runtime=md_runtime("load"),
+        mem_mb=stage_mem_mb("load"),
+        runtime=stage_runtime("load"),
     params:
         py=PY,
         scene=scene_json,
@@ -58,8 +58,8 @@ rule piston_point:
         "../envs/hugomap.yaml"
     threads: config["threads"]
     resources:
-        mem_mb=md_mem_mb("piston"),
-        runtime=md_runtime("piston"),
+        mem_mb=stage_mem_mb("piston"),
+        runtime=stage_runtime("piston"),
     params:
         py=PY,
         scene=scene_json,
@@ -69,13 +69,13 @@ rule piston_point:
         " --out {output} > {log} 2>&1"
 
 
-rule md_reference:
+rule shared_reference:
     output:
         f"{RES}/references/{{key}}.nc",
     log:
         f"{RES}/logs/references/{{key}}.log",
     wildcard_constraints:
-        key="lj_[0-9a-f]{12}",
+        key="[a-z]+_[0-9a-f]{12}",
     conda:
         "../envs/hugomap.yaml"
     threads: 1
@@ -101,7 +101,7 @@ rule reference:
         "../envs/hugomap.yaml"
     threads: 1
     resources:
-        mem_mb=md_mem_mb("reference"),
+        mem_mb=stage_mem_mb("reference"),
         runtime=scene_reference_runtime,
     params:
         py=PY,

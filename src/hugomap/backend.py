@@ -1,0 +1,107 @@
+"""The seam between the workflow's stages and a solver: the ``Backend`` protocol and the
+neutral records that cross it.
+
+A stage (``hugomap.stages``) never reads ``scene["solver"]``: it asks the registry
+(``hugomap.registry``) for the scene's backend and talks to it through this protocol. A
+backend owns its units (LJ reduced units for MD, SI for CSPH), its kernels, its checkpoint
+layout and its cost model; what it hands back is neutral (``hugomap.states``): a ``Pole``, a
+``PistonFrame``, a ``Profile`` reader, ``ControlParams`` and ``Resources``. The methods
+(``hugomap.window``) drive the solver it returns through ``window.protocol.ShockSolver`` and
+``WindowSolver``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import xarray as xr
+
+from .io.dataset import UnitTable
+from .states import ControlParams, PistonFrame, Pole, Profile, Resources
+from .window.protocol import ShockSolver, WindowSolver
+
+
+@dataclass(frozen=True)
+class WindowStart:
+    """What ``Backend.open_window`` returns: the settled window, the pole of its inflow
+    material, its ω signal (normalised by that pole and the shocked state), and attributes
+    to keep in the window checkpoint."""
+
+    window: WindowSolver
+    pole: Pole
+    signal: Any  # window.methods.OmegaSignal
+    attrs: dict[str, Any] = field(default_factory=dict)
+
+
+class Backend(Protocol):
+    """What the stages need of a solver (module docstring)."""
+
+    name: str
+    units: UnitTable
+
+    def prepare(self, scene: dict) -> tuple[ShockSolver, Pole, dict[str, Any]]:
+        """Build the scene's sample and measure its pole; returns the solver, the pole and
+        ``info``: what the backend must know of its sample later (JSON-able; every later
+        checkpoint carries it, and the methods below that take ``info`` get it back)."""
+
+    def save(
+        self, solver: ShockSolver | WindowSolver, out: str | os.PathLike,
+        extra: xr.Dataset | None, attrs: dict[str, Any],
+    ) -> Path:  # fmt: skip
+        """The solver's complete state as a verified checkpoint (bit-exact on resume)."""
+
+    def load(self, ds: xr.Dataset, source: str | os.PathLike | None = None) -> ShockSolver:
+        """The simulation of a sample, loading or partial checkpoint (verified)."""
+
+    def load_window(self, ds: xr.Dataset, source: str | os.PathLike | None = None) -> WindowSolver:
+        """The window of a window checkpoint (verified)."""
+
+    def start_piston(self, solver: ShockSolver, scene: dict, u_p: float) -> None:
+        """Set a prepared sample in motion: the piston at ``u_p`` (in the backend's frame)."""
+
+    def piston_frame(
+        self, solver: ShockSolver, scene: dict, u_p: float, info: dict
+    ) -> PistonFrame:
+        """How a piston run at ``u_p`` is measured (no change to the solver)."""
+
+    def profile(self, solver: ShockSolver | WindowSolver, scene: dict, info: dict) -> Profile:
+        """The profile reader of ``solver`` at the scene's bin width."""
+
+    def open_window(
+        self, solver: ShockSolver, loaded: xr.Dataset, scene: dict, u_p: float,
+        front: float, D_guess: float, pole: Pole, info: dict,
+    ) -> WindowStart:  # fmt: skip
+        """Cut the moving window out of a loading checkpoint at the front position ``front``,
+        in the frame of ``D_guess``, and let it settle; raises a ``failures`` exception (or
+        ``ValueError`` for a window that cannot be made) with its status."""
+
+    def control_params(self, scene: dict, u_p: float, window: WindowSolver) -> ControlParams:
+        """The window schemes' times and gains for this point, in the backend's units."""
+
+    def reference(self, scene: dict) -> xr.Dataset:
+        """The scene's reference Hugoniot (dim ``point``: u_p, D, P, V, rho, E, …)."""
+
+    def reference_inputs(self, scene: dict) -> dict | None:
+        """What the reference depends on, when it is worth sharing between scenes (a run
+        of its own, e.g. equilibrium MD); None when each scene computes its own."""
+
+    def extras(self, solver: ShockSolver, out: Path, scene: dict, u_p: float, info: dict) -> None:
+        """Write a piston run's extras beside its point file (snapshots); may do nothing."""
+
+    def cost(self, scene: dict, stage: str) -> Resources:
+        """Resources of one job of ``stage`` (prepare, load, piston, reference, window)."""
+
+    def axis_labels(self) -> dict[str, tuple[str, float]]:
+        """Figure axis labels and scale factors: V, P, u_p_measured, D."""
+
+    def scale(self, scene: dict) -> dict[str, float]:
+        """Dimensionless resolution of a scene's window: n_window (particles in it at the
+        upstream density), window_spacings (its length in particle spacings), spacing."""
+
+    def sound_speed(self, scene: dict) -> float | None:
+        """The material model's sound speed c0 where it has one (None: fit the reference)."""
+
+

@@ -1,0 +1,309 @@
+"""The MD backend: Lennard-Jones molecular dynamics behind ``hugomap.backend.Backend``.
+
+Reduced LJ units throughout (σ, ε, m = 1, τ = σ√(m/ε), k_B = 1). The sample is an FCC box
+closed by two static walls (``md.sample.fcc_state``); the piston runs in the piston's frame
+(the sample at −u_p, the piston wall at rest, the far wall moving with the upstream
+material); the window is ``md.window.MDWindow`` with an equilibrated periodic reservoir as its
+inflow; the reference Hugoniot is equilibrium NVT MD (``md.reference``), shared between scenes
+with the same inputs.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..analysis.shock import bin_edges, slab_state, track_front
+from ..analysis.stats import block_average
+from ..backend import WindowStart
+from ..io.dataset import lj_units
+from ..states import ControlParams, PistonFrame, Pole, Resources
+
+log = logging.getLogger("hugomap")
+WALL_LAYER = 4.0  # sigma kept clear of a wall when measuring the pole (wall layering)
+
+# Cost model (Snakemake mem_mb, runtime), measured on the 2-core development machine.
+BASE_MB = 1024  # Python + numba + xarray/netCDF: about 350 MB resident, measured
+# state ~0.2 kB + full Verlet list ~0.8 kB (int32 rows, rho* <= 1.5), x4 margin
+BYTES_PER_ATOM = 4096
+S_PER_ATOM_STEP = 1.0e-6  # 1-core kernel ~3e-7 s, x3: sampling, I/O
+REF_POLE_FACTOR, REF_MAX_ITER = 4, 10  # md.reference.reference_hugoniot defaults
+
+
+def lj(scene: dict):
+    """The scene's potential, ``md.potential.LJParams`` (``potential`` block: rc [σ],
+    shift, skin [σ])."""
+    from .potential import LJParams
+
+    p = scene["potential"]
+    return LJParams(rc=p["rc"], shift=p["shift"], skin=p["skin"])
+
+
+class MDProfile:
+    """Profile reader of an MD run: bins of ``bin_width`` [σ] from x = 0 across the transverse
+    ``area`` [σ²]; fields by ``md.profiles.fields_from_sums`` (n is also the mass density,
+    m = 1)."""
+
+    x0 = 0.0
+
+    def __init__(self, area: float, bin_width: float):
+        self.area = float(area)
+        self.bin_width = float(bin_width)
+
+    def sums(self, solver) -> np.ndarray:
+        return solver.profile_sums(self.bin_width)
+
+    def velocity(self, sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        c = sums[:, 0]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return sums[:, 1] / c, c
+
+    def state(self, summed: np.ndarray, n_bins: int) -> dict[str, float]:
+        from .profiles import fields_from_sums
+
+        f = fields_from_sums(summed[None, :], self.area * self.bin_width * n_bins)
+        return {"rho": float(f["n"][0]), "u": float(f["ux"][0]), "P": float(f["Pxx"][0]),
+                "Pyy": float(f["Pyy"][0]), "Pzz": float(f["Pzz"][0]), "E": float(f["e"][0]),
+                "T": float(f["T"][0])}  # fmt: skip
+
+
+def _area(solver) -> float:
+    area = getattr(solver, "area", None)
+    if area is not None:
+        return float(area)
+    L = solver.state.L
+    return float(L[1] * L[2])
+
+
+def _n_atoms(scene: dict) -> int:
+    nx, ny, nz = scene["sample"]["cells"]
+    return 4 * nx * ny * nz  # FCC
+
+
+class MDBackend:
+    """``Backend`` for ``solver: md`` scenes (module docstring)."""
+
+    name = "md"
+    units = lj_units()
+
+    # -- sample and checkpoints ------------------------------------------------------------
+    def prepare(self, scene: dict) -> tuple[Any, Pole, dict[str, Any]]:
+        """FCC at (ρ0, T0) between two static walls, thermostatted (CSVR) for
+        ``equilibrate_time``, then run without thermostat for ``pole_time`` while the pole is
+        measured away from the walls: ρ0, P0 = P_xx, E0, T0, P_yy0 (block averages with
+        standard errors)."""
+        from .sample import fcc_state
+        from .simulation import MDSimulation
+
+        s = scene["sample"]
+        state = fcc_state(tuple(s["cells"]), s["rho0"], s["T0"], s["seed"], periodic_x=False)
+        sim = MDSimulation(
+            state, lj(scene), s["dt"], T_bath=s["T0"], tau_bath=s["thermostat_tau"],
+            seed=s["seed"],
+        )  # fmt: skip
+        sim.advance(int(round(s["equilibrate_time"] / s["dt"])))
+        sim.T_bath = None
+        prof = MDProfile(_area(sim), scene["shock"]["bin_width"])
+        every = 25
+        nsamples = max(int(round(s["pole_time"] / (s["dt"] * every))), 16)
+        keys = {"rho": "rho0", "P": "P0", "E": "E0", "T": "T0", "Pyy": "Pyy0"}
+        series: dict[str, list[float]] = {k: [] for k in keys}
+        nb = int(np.floor(state.L[0] / prof.bin_width + 1e-9))
+        edges = bin_edges(prof, nb)
+        for _ in range(nsamples):
+            sim.advance(every)
+            sums = prof.sums(sim)[:nb]
+            st = slab_state(prof, sums, edges, WALL_LAYER, state.L[0] - WALL_LAYER)
+            for k in keys:
+                series[k].append(st[k])
+        pole = {}
+        for k, name in keys.items():
+            pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
+        return sim, Pole.from_dict(pole), {}
+
+    def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
+        return solver.save(out, extra=extra, attrs=attrs)
+
+    def load(self, ds: xr.Dataset, source: str | os.PathLike | None = None):
+        from .simulation import MDSimulation
+
+        return MDSimulation.from_dataset(ds, source)
+
+    def load_window(self, ds: xr.Dataset, source: str | os.PathLike | None = None):
+        from .window import MDWindow
+
+        return MDWindow.from_dataset(ds, source)
+
+    # -- the piston ------------------------------------------------------------------------
+    def start_piston(self, solver, scene: dict, u_p: float) -> None:
+        """Piston frame: the sample's own mean x velocity (a thermal drift of order √(T/N)
+        left by the walls and thermostat of the preparation) is removed and every atom gets
+        −u_p; the piston wall stays at rest, the far wall moves at −u_p. The upstream flow is
+        then exactly −u_p and the particle-velocity jump exactly u_p."""
+        solver.dt = scene["shock"]["dt"]
+        solver.T_bath = None
+        solver.galilean_shift(-u_p - solver.mean_velocity())
+        solver.set_walls(0.0, -u_p)
+
+    def piston_frame(self, solver, scene: dict, u_p: float, info: dict) -> PistonFrame:
+        sh = scene["shock"]
+        return PistonFrame(
+            u_behind=0.0, u_ahead=-u_p, x_origin=solver.wall_positions()[0],
+            load_distance=sh["load_fraction"] * float(solver.state.L[0]),
+            rear_margin=sh["rear_margin"], max_time=sh["max_time"],
+            sample_every=sh["sample_every"],
+        )  # fmt: skip
+
+    def profile(self, solver, scene: dict, info: dict | None = None) -> MDProfile:
+        return MDProfile(_area(solver), scene["shock"]["bin_width"])
+
+    # -- the window ------------------------------------------------------------------------
+    def open_window(
+        self, solver, loaded: xr.Dataset, scene: dict, u_p: float, front: float,
+        D_guess: float, pole: Pole, info: dict,
+    ) -> WindowStart:  # fmt: skip
+        """``MDWindow.from_piston`` with the front at ``window.front_fraction``, its inflow a
+        reservoir snapshot. A fluid's inflow is made at the piston sample's measured
+        (ρ0, E0), so both schemes share one pole (the sample's more precise P0, T0 are kept;
+        the inflow's own measurement, a ~1000-atom box over 2 τ, is stored beside them as a
+        check); a crystal's keeps the nominal lattice (the seam needs its registry) and T0,
+        and its pole is the inflow's. The window runs ``settle_time`` at the guessed D (the
+        set-up transient: new boundaries, the first seam), then ω is normalised by the pole
+        (ρ0, P0) and the shocked slab between the outflow edge and the front (``shock.gap``
+        clear of both)."""
+        from ..window.methods import OmegaSignal
+        from .window import MDWindow, make_reservoir
+
+        w, sh, s = scene["window"], scene["shock"], scene["sample"]
+        fluid = scene["phase"] != "crystal"
+        res, inflow = make_reservoir(
+            (s["cells"][1], s["cells"][2]), pole.rho0 if fluid else s["rho0"], s["T0"],
+            solver.lj, solver.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"],
+            s["thermostat_tau"], E0_target=pole.E0 if fluid else None,
+        )  # fmt: skip
+        log.info("inflow pole: %s", json.dumps(inflow))
+        win = MDWindow.from_piston(
+            solver, res, front, u_p, D_guess, w["length"], w["front_fraction"],
+            w["ghost_width"], w["cut_every"], w["sync_steps"],
+            crystal=not fluid, lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0),
+        )  # fmt: skip
+        wpole = pole if fluid else Pole.from_dict(inflow)
+        o = w["outflow"]
+        if o["kind"] == "absorbing":
+            # Z = ρ0 D and the averages started at the jump condition's P0 + ρ0 D u_p
+            win.set_absorbing(wpole.rho0 * D_guess, o["tau_fast"], o["tau_slow"],
+                              wpole.P0 + wpole.rho0 * D_guess * u_p)  # fmt: skip
+        win.advance(int(round(w["settle_time"] / win.dt)))
+        g, prof = win.geom, self.profile(win, scene)
+        sums = prof.sums(win)
+        x_f = track_front(prof, sums, g.x_lo, g.x_hi, win.u_out, win.u_in)
+        if not np.isfinite(x_f):
+            x_f = g.x_lo + w["front_fraction"] * g.length
+        edges = bin_edges(prof, sums.shape[0])
+        shocked = slab_state(prof, sums, edges, g.x_lo + 0.5 * sh["gap"], x_f - 0.5 * sh["gap"])
+        key = "rho" if w["omega"] == "N" else "P"
+        up = wpole.rho0 if key == "rho" else wpole.P0
+        sig = OmegaSignal(w["omega"], up * win.area * g.length,
+                          shocked[key] * win.area * g.length, sh["bin_width"], prof)  # fmt: skip
+        return WindowStart(win, wpole, sig, {f"inflow_{k}": v for k, v in inflow.items()})
+
+    def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
+        w = scene["window"]
+        d = w["dichotomy"]
+        return ControlParams(
+            window_time=w["window_time"], average_time=w["average_time"],
+            trial_time=d["trial_time"], final_time=d["final_time"], every=w["sample_every"],
+            calm_windows=w["calm_windows"], max_windows=w["max_windows"], z=w["z"],
+            max_drift=w["drift_fraction"] * window.geom.length / w["average_time"],
+            beta=w["amw"]["beta"], gain_rate=w["mw"]["gain_rate"],
+            gain_position=w["mw"]["gain_position"], target=w["front_fraction"],
+            outflow_gap=scene["shock"]["gap"],
+        )  # fmt: skip
+
+    # -- the reference ---------------------------------------------------------------------
+    def reference_inputs(self, scene: dict) -> dict:
+        """What the equilibrium reference depends on (``reference`` reads nothing else):
+        the potential block, the pole (``sample.rho0`` [σ⁻³], ``sample.T0`` [ε/k_B]), the
+        sample's seed and the ``reference`` block. Scenes that agree on these share one
+        computation."""
+        s = scene["sample"]
+        return {
+            "solver": "md",
+            "potential": dict(scene["potential"]),
+            "sample": {"rho0": s["rho0"], "T0": s["T0"], "seed": s["seed"]},
+            "reference": dict(scene["reference"]),
+        }
+
+    def reference(self, scene: dict) -> xr.Dataset:
+        """The equilibrium-MD Hugoniot of ``reference_inputs(scene)`` (``md.reference``)."""
+        from .reference import reference_hugoniot
+
+        s, r = scene["sample"], scene["reference"]
+        ds = reference_hugoniot(
+            s["rho0"], s["T0"], lj(scene),
+            compressions=r["compressions"], cells=(r["cells"],) * 3, dt=r["dt"],
+            n_equil=r["equilibrate_steps"], n_prod=r["production_steps"], seed=s["seed"],
+        )  # fmt: skip
+        ds.attrs["reference_inputs"] = json.dumps(self.reference_inputs(scene), sort_keys=True)
+        return ds
+
+    def extras(self, solver, out: Path, scene: dict, u_p: float, info: dict) -> None:
+        """MD writes no snapshot yet."""
+
+    # -- cost ------------------------------------------------------------------------------
+    def _profile_bytes(self, scene: dict) -> float:
+        """Profile history of one shock stage: samples x bins x 11 sums (float64)."""
+        s, sh = scene["sample"], scene["shock"]
+        length = s["cells"][0] * (4.0 / s["rho0"]) ** (1.0 / 3.0)
+        n_samples = sh["max_time"] / sh["dt"] / sh["sample_every"]
+        return n_samples * (length / sh["bin_width"] + 1) * 11 * 8
+
+    def cost(self, scene: dict, stage: str) -> Resources:
+        """Memory: the state and neighbour list per atom, plus the profile history held and
+        copied once into the dataset; CPU: an upper bound of atom-steps at the 1-core rate
+        (``prepare``: equilibration and pole; ``load``/``piston``: each stops at
+        ``shock.max_time``; ``reference``: the pole (REF_POLE_FACTOR x production) then
+        REF_MAX_ITER NVT runs per compression; other stages as a piston stage)."""
+        s, sh = scene["sample"], scene["shock"]
+        if stage == "reference":
+            r = scene["reference"]
+            n = 4 * r["cells"] ** 3
+            run = r["equilibrate_steps"] + r["production_steps"]
+            steps = r["equilibrate_steps"] + REF_POLE_FACTOR * r["production_steps"]
+            steps += REF_MAX_ITER * len(r["compressions"]) * run
+            return Resources(int(BASE_MB + n * BYTES_PER_ATOM / 2**20), n * steps * S_PER_ATOM_STEP)
+        n = _n_atoms(scene)
+        if stage == "prepare":
+            steps = (s["equilibrate_time"] + s["pole_time"]) / s["dt"]
+            return Resources(int(BASE_MB + n * BYTES_PER_ATOM / 2**20), n * steps * S_PER_ATOM_STEP)
+        extra = self._profile_bytes(scene)
+        mem = int(BASE_MB + (n * BYTES_PER_ATOM + 2 * extra) / 2**20)
+        return Resources(mem, n * sh["max_time"] / sh["dt"] * S_PER_ATOM_STEP)
+
+    # -- presentation ----------------------------------------------------------------------
+    def axis_labels(self) -> dict[str, tuple[str, float]]:
+        return {"V": ("specific volume V [σ³]", 1.0),
+                "P": ("longitudinal stress P_xx [ε σ⁻³]", 1.0),
+                "u_p_measured": ("particle velocity u_p [σ/τ]", 1.0),
+                "D": ("shock velocity D [σ/τ]", 1.0)}  # fmt: skip
+
+    def sound_speed(self, scene: dict) -> float | None:
+        """No model sound speed: the campaign fits one to the reference Hugoniot."""
+        return None
+
+    def scale(self, scene: dict) -> dict[str, float]:
+        """Particles in the window at ρ0 (ρ0 A L), its length in spacings ρ0^(-1/3)."""
+        w, s = scene.get("window", {}), scene["sample"]
+        L = float(w.get("length", math.nan))
+        a = (4.0 / float(s["rho0"])) ** (1.0 / 3.0)  # FCC lattice constant
+        spacing = float(s["rho0"]) ** (-1.0 / 3.0)
+        across = float(s["rho0"]) * s["cells"][1] * s["cells"][2] * a * a * spacing
+        return {"n_window": across * L / spacing, "window_spacings": L / spacing,
+                "spacing": spacing}  # fmt: skip

@@ -1,0 +1,52 @@
+"""Stage ``aggregate``: all points of a scene → ``results/hugoniot/<scene>.nc`` (dims
+scheme × u_p), in the scene backend's units, with its reference beside them."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import netCDF4
+import numpy as np
+import xarray as xr
+
+from ..io.atomic import write_netcdf
+from ..io.dataset import aggregate_points
+from ..registry import backend as backend_of
+
+
+def aggregate(
+    points: list[str],
+    reference: str | None,
+    config: dict,
+    scene: str,
+    out: str | os.PathLike,
+    scheme: str = "piston",
+) -> Path:
+    """Points are grouped by the ``scheme`` attribute of their files (``scheme`` is the
+    default for files without one), each group is joined along u_p, and the groups along
+    scheme; a variable that one scheme's points never produced (all failed) is NaN there."""
+    units = backend_of(config["scenes"][scene]).units
+    ref = None
+    if reference:
+        with xr.open_dataset(reference, engine="netcdf4") as r:
+            ref = r.load()
+    groups: dict[str, list[str]] = {}
+    for p in points:
+        with netCDF4.Dataset(p) as nc:
+            name = getattr(nc, "scheme", scheme)
+        groups.setdefault(str(name), []).append(p)
+    parts = [
+        aggregate_points(ps, name, ref, config, scene, units).sortby("u_p")
+        for name, ps in groups.items()
+    ]
+    names = {k for part in parts for k, v in part.data_vars.items() if "scheme" in v.dims}
+    for i, part in enumerate(parts):
+        for k in names - set(part.data_vars):
+            src = next(q[k] for q in parts if k in q)
+            fill = np.full((1, part.sizes["u_p"]), np.nan if src.dtype.kind == "f" else 0,
+                           dtype=src.dtype if src.dtype.kind != "O" else object)  # fmt: skip
+            parts[i] = parts[i].assign({k: (("scheme", "u_p"), fill, src.attrs)})
+    ds = xr.concat(parts, dim="scheme", data_vars="minimal", coords="minimal", compat="override",
+                   join="outer", combine_attrs="override")  # fmt: skip
+    return write_netcdf(ds.load(), out)

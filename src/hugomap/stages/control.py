@@ -1,0 +1,64 @@
+"""Stage ``amw``/``mw``: a control scheme until the front is steady, then the steady
+average (``window.steady.steady_state``)."""
+
+from __future__ import annotations
+
+import logging
+import os
+from pathlib import Path
+
+from ..failures import Failure
+from ..registry import backend as backend_of
+from ..window.methods import amw, mw
+from ..window.steady import steady_state
+from .files import Clock
+from .windows import open_window, prior_cost, window_point
+
+log = logging.getLogger("hugomap")
+
+
+def control_point(
+    window0: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike, scheme: str
+) -> Path:
+    """An AMW point (``window.methods.amw``: the amplitude u_p = u_out − u_in held, the frame
+    shifted by −β L a_k) or an MW point (``window.methods.mw``: the inflow, so D = −u_in,
+    held and u_out steered) until steady, then the steady average. MW's amplitude settles to
+    the u_p whose shock runs at the held D: its point is (D, u_p_set)."""
+    b = backend_of(scene)
+    clock = Clock()
+    if scheme not in ("amw", "mw"):
+        return window_point(out, b, scheme, scene, u_p, None, None, {}, clock.cost(),
+                            "bad_config", f"scheme {scheme} is not a control scheme (amw, mw)")  # fmt: skip
+    try:
+        win, sig, pole, ds, profile = open_window(b, window0, scene)
+    except Failure as exc:
+        return window_point(out, b, scheme, scene, u_p, None, None, {}, clock.cost(),
+                            exc.status, exc.diagnostic)  # fmt: skip
+    clock.add(prior_cost(ds))
+    cp = b.control_params(scene, u_p, win)
+    sh = scene["shock"]
+    step0 = win.steps
+    common = dict(window_time=cp.window_time, calm_windows=cp.calm_windows,
+                  max_windows=cp.max_windows, every=cp.every, z=cp.z, max_drift=cp.max_drift)  # fmt: skip
+    values: dict = {}
+    hist = h = None
+    try:
+        if scheme == "amw":
+            res, hist = amw(win, sig, beta=cp.beta, **common)
+        else:
+            res, hist = mw(win, sig, gain_rate=cp.gain_rate, gain_position=cp.gain_position,
+                           target=cp.target, **common)  # fmt: skip
+        if res.converged:
+            values, h = steady_state(win, profile, pole, sig, cp.average_time, cp.every,
+                                     sh["gap"], sh["avg_length"], sh["residual_tol"],
+                                     cp.outflow_gap)  # fmt: skip
+            status, diagnostic = str(values.pop("status")), str(values.pop("diagnostic"))
+            log.info("%s: D = %.6g +- %.2g, u_p = %.6g, P = %.6g, %s", scheme, values["D"],
+                     values["D_err"], values["u_p_set"], values["P"], status)  # fmt: skip
+        else:
+            status, diagnostic = res.status, res.diagnostic
+    except Failure as exc:
+        status, diagnostic = exc.status, exc.diagnostic
+    cost = clock.cost(win.n_particles * (win.steps - step0))
+    return window_point(out, b, scheme, scene, u_p, pole, win, values, cost, status, diagnostic,
+                        h, profile, hist)  # fmt: skip

@@ -1,0 +1,171 @@
+"""Stage ``piston``: continue the piston from the loading checkpoint until the front nears
+the far end, then measure the Hugoniot point (``analysis.shock.measure_point``).
+
+A periodic checkpoint ``<out>.part.nc`` (every ``shock.checkpoint_every`` samples) lets a
+killed job resume where it stopped; one that fails its checks (format, checksum, the same
+loading checkpoint) is logged and ignored, and the run starts again from the loading
+checkpoint.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..analysis.shock import measure_point
+from ..failures import CheckpointError, Failure
+from ..registry import backend as backend_of
+from ..states import PistonFrame, Pole
+from ..window.piston import History, drive
+from .files import INFO_ATTR, Clock, history_of, history_vars, info_of, is_ok, open_dataset
+from .files import pole_vars, write_point
+
+log = logging.getLogger("hugomap")
+STALE_TMP_S = 60.0  # a temporary file not written to for this long was left by a killed write
+
+
+def _remove_stale_temporaries(out: Path) -> None:
+    """Remove the temporary files (``io.atomic``) of ``out`` and of its partial checkpoint
+    that a killed write left behind; one written to in the last ``STALE_TMP_S`` seconds may
+    belong to a write in progress (a second sweep in the same folder) and is kept."""
+    now = time.time()
+    for tmp in out.parent.glob(f".{out.name}.*.tmp"):
+        try:
+            if now - tmp.stat().st_mtime >= STALE_TMP_S:
+                log.info("removing %s, left by a killed write", tmp)
+                tmp.unlink()
+        except FileNotFoundError:
+            pass
+
+
+def save_partial(
+    b, sim, h: History, pole: Pole, cost: dict[str, float], loaded: xr.Dataset,
+    part: str | os.PathLike,
+) -> Path:  # fmt: skip
+    """Write the periodic checkpoint ``part`` of a running piston point: the state, its
+    history and pole, the cost so far, and the checksum of the loading checkpoint it descends
+    from (``parent_checksum``: a partial checkpoint left by a run from another loading
+    checkpoint, e.g. before a config change, is not resumed)."""
+    extra = xr.merge([history_vars(h), pole_vars(pole, b)])
+    attrs = {
+        "stage": "drive", "status": "ok", "cost": json.dumps(cost),
+        "parent_checksum": str(loaded.attrs.get("checksum", "")),
+        INFO_ATTR: loaded.attrs.get(INFO_ATTR, "{}"),
+    }  # fmt: skip
+    return b.save(sim, part, extra, attrs)
+
+
+def _resume_partial(b, part: Path, loaded: xr.Dataset) -> tuple[xr.Dataset, object, History] | None:
+    """The partial checkpoint ``part`` of a killed run (dataset, simulation, history), if
+    there is one that can be resumed; else None (logged): a missing file, an unreadable,
+    foreign or altered one (``CheckpointError``), or one from another loading checkpoint."""
+    if not part.exists():
+        return None
+    try:
+        dp = open_dataset(part)
+        if dp.attrs.get("parent_checksum") != loaded.attrs.get("checksum"):
+            raise CheckpointError(
+                str(part),
+                "it descends from another loading checkpoint (parent_checksum "
+                f"{dp.attrs.get('parent_checksum')!r}, loaded {loaded.attrs.get('checksum')!r})",
+            )
+        resumed = dp, b.load(dp, part), history_of(dp)  # format and checksum verified
+    except (CheckpointError, OSError, ValueError, KeyError) as exc:
+        log.warning(
+            "ignoring partial checkpoint %s, restarting from the loaded state: %s", part, exc
+        )
+        return None
+    log.info("resuming from %s at t = %.6g (step %d)", part, resumed[1].time, resumed[1].steps)
+    return resumed
+
+
+def log_progress(sim, h: History, frame: PistonFrame, x_start: list, wall: float) -> None:
+    """A progress line: step, simulated time, front, fraction of the drive done, ETA.
+
+    The drive ends when the front is ``rear_margin`` from the far end; the fraction is how
+    much of that gap (front to far end, both may move) has closed since the drive began
+    (``x_start[0]``: the gap and wall time then, set on the first call), the ETA that
+    fraction's wall rate; before any progress it says so rather than guess."""
+    xf = next((f for f in reversed(h.front) if np.isfinite(f)), float("nan"))
+    if not np.isfinite(xf):
+        return
+    xr = frame.far_end if frame.far_end is not None else sim.wall_positions()[1]
+    gap = xr - xf - frame.rear_margin  # what the front still has to close
+    if x_start[0] is None:
+        x_start[0] = (gap, wall)
+    gap0, w0 = x_start[0]
+    done = 1.0 - gap / gap0 if gap0 > 0 else 1.0
+    eta = f"ETA {(wall - w0) * (1.0 - done) / done:.0f} s" if done > 0 else "ETA after the next line"
+    log.info(
+        "progress: step %d, t = %.6g, front %.6g, %.0f %% of the drive, %s",
+        sim.steps, sim.time, xf, 100.0 * min(max(done, 0.0), 1.0), eta,
+    )  # fmt: skip
+
+
+def piston_point(
+    loaded: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike,
+    scheme: str = "piston",
+) -> Path:  # fmt: skip
+    """Continue the piston from ``loaded`` (or its partial checkpoint) until the front is
+    ``rear_margin`` from the far end (``window.piston.drive``), measure the point over the
+    drive samples, write the backend's extras (snapshots) and the point file."""
+    b = backend_of(scene)
+    sh = scene["shock"]
+    ds = open_dataset(loaded)
+    base = {"piston_velocity": u_p}
+    if not is_ok(ds):
+        return write_point(out, b, scene, scheme, base, {}, None, ds.attrs["status"],
+                           ds.attrs.get("diagnostic", ""))  # fmt: skip
+    info = info_of(ds)
+    sim0 = b.load(ds, loaded)  # verified: its pole is used whichever state the run resumes from
+    part = Path(str(out) + ".part.nc")
+    _remove_stale_temporaries(Path(out))
+    resumed = _resume_partial(b, part, ds)
+    src, sim, h = (ds, sim0, history_of(ds)) if resumed is None else resumed
+    pole = Pole.from_dataset(ds)
+    clock = Clock(json.loads(src.attrs.get("cost", ds.attrs.get("cost", "{}"))))
+    frame = b.piston_frame(sim, scene, u_p, info)
+    profile = b.profile(sim, scene, info)
+    step0 = sim.steps
+    n_since, x_start = [0], [None]
+
+    def checkpoint() -> None:
+        n_since[0] += 1
+        if n_since[0] % sh["checkpoint_every"] == 0:
+            log_progress(sim, h, frame, x_start, clock.cost()["wall_s"] - clock.prior["wall_s"])
+            save_partial(b, sim, h, pole, clock.cost(sim.n_particles * (sim.steps - step0)),
+                         ds, part)  # fmt: skip
+
+    status, diagnostic = "ok", ""
+    try:
+        drive(sim, frame, profile, h, on_sample=checkpoint)
+    except Failure as exc:
+        status, diagnostic = exc.status, exc.diagnostic
+        log.error("%s: %s", status, diagnostic)
+    values = {**base, **clock.cost(sim.n_particles * (sim.steps - step0))}
+    a = h.arrays()
+    if status == "ok":
+        d = a["stage"] == 1
+        r = measure_point(
+            {k: a[k][d] for k in ("t", "front", "x_left", "x_right", "sums")}, profile, pole,
+            frame.u_behind, frame.u_ahead, sh["gap"], sh["avg_length"], sh["residual_tol"],
+        )  # fmt: skip
+        r.pop("u_p"), r.pop("u_p_err")  # u_p is exact: the dataset's coordinate
+        status, diagnostic = str(r.pop("status")), str(r.pop("diagnostic"))
+        values.update(r)
+        log.info("point: D = %.6g +- %.2g, u_p %.6g (measured %.6g), P = %.6g +- %.2g, %s",
+                 r["D"], r["D_err"], u_p, r["u_p_measured"], r["P"], r["P_err"], status)  # fmt: skip
+    try:
+        b.extras(sim, Path(out), scene, u_p, info)
+    except (ValueError, OSError) as exc:  # an extra: keep the point
+        log.warning("snapshot not written: %s", exc)
+    path = write_point(out, b, scene, scheme, values, pole.as_dict(),
+                       {k: a[k] for k in ("t", "front", "stage")}, status, diagnostic)  # fmt: skip
+    part.unlink(missing_ok=True)
+    return path
