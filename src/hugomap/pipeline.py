@@ -19,18 +19,14 @@ import xarray as xr
 
 from .analysis.shock import analyse_piston, region_state
 from .analysis.stats import block_average
+from .failures import CheckpointError, SolverUnstable, StageFailed
 from .io.atomic import write_netcdf
+from .io.checkpoint import read_checkpoint, verify_checkpoint
 from .io.dataset import POLE_VARS, aggregate_points, point_dataset, scalar_vars
 from .md.potential import LJParams
 from .md.sample import fcc_state
-from .md.simulation import (
-    CheckpointError,
-    MDSimulation,
-    SolverUnstable,
-    read_checkpoint,
-    verify_checkpoint,
-)
-from .window.piston import History, PistonParams, StageFailed, drive, load_to_target, start_piston
+from .md.simulation import MDSimulation
+from .window.piston import History, PistonParams, drive, load_to_target, start_piston
 
 log = logging.getLogger("hugomap")
 WALL_LAYER = 4.0  # sigma kept clear of a wall when measuring the pole (wall layering)

@@ -49,11 +49,12 @@ import xarray as xr
 from .analysis.stats import CorrelatedSlope, block_average, line_fit
 from .config import fill_csph_defaults
 from .eos import EOS
+from .failures import SlabError, SPHUnstable
 from .io.atomic import write_json, write_netcdf
 from .io.dataset import control_vars, point_dataset, scalar_vars, solver_tables
 from .sph import checkpoint as ckpt
 from .sph.sample import Sample, SampleError, lattice_1d, lattice_2d, porous_2d, porous_tile_2d
-from .sph.simulation import CSPHSimulation, SPHUnstable, profile_fields
+from .sph.simulation import CSPHSimulation, profile_fields
 from .sph.state import SPHState
 from .sph.window import InflowTile, SPHWindow, SPHWindow2D, window_from_dataset
 from .strength import Strength
@@ -598,14 +599,6 @@ def _inflow_tile(scene: dict, info: dict) -> tuple[InflowTile, dict]:
              rec["tile_length"], width, tile.n, rec["tile_n_pores"], tile.distention,
              rec["sample_distention_core"])  # fmt: skip
     return InflowTile.from_sample(tile), rec
-
-
-class SlabError(Exception):
-    """A window measurement without its slab behind the front (``status``, ``diagnostic``)."""
-
-    def __init__(self, status: str, diagnostic: str):
-        super().__init__(f"{status}: {diagnostic}")
-        self.status, self.diagnostic = status, diagnostic
 
 
 def steady_state(win: SPHWindow, scene: dict, pole: dict, duration: float, signal) -> dict:

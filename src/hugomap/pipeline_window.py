@@ -19,11 +19,12 @@ import xarray as xr
 
 from .analysis.shock import analyse_piston, front_position, region_state
 from .analysis.stats import CorrelatedSlope, line_fit
+from .failures import SolverUnstable, WindowError
 from .io.atomic import write_json, write_netcdf
 from .io.dataset import POLE_VARS, control_vars, point_dataset, scalar_vars
 from .md.profiles import fields_from_sums
-from .md.simulation import MDSimulation, SolverUnstable
-from .md.window import MDWindow, WindowError, make_reservoir
+from .md.simulation import MDSimulation
+from .md.window import MDWindow, make_reservoir
 from .pipeline import _cpu, _failure, _history_from, _pole_from
 from .window import dichotomy as dich
 from .window.methods import ControlHistory, OmegaSignal, amw, fixed_run, mw

@@ -22,16 +22,17 @@ import yaml
 
 from hugomap import pipeline
 from hugomap.config import validate_config
-from hugomap.md.potential import LJParams
-from hugomap.md.sample import fcc_state
-from hugomap.md.simulation import (
-    CHECKPOINT_FORMAT,
-    CheckpointError,
-    MDSimulation,
+from hugomap.failures import CheckpointError
+from hugomap.io.checkpoint import (
+    MD_CHECKPOINT,
+    MD_WINDOW_CHECKPOINT,
     checkpoint_checksum,
     read_checkpoint,
 )
-from hugomap.md.window import WINDOW_FORMAT, MDWindow, WindowGeometry
+from hugomap.md.potential import LJParams
+from hugomap.md.sample import fcc_state
+from hugomap.md.simulation import MDSimulation
+from hugomap.md.window import MDWindow, WindowGeometry
 
 from ._reference import one_numba_thread
 
@@ -89,7 +90,7 @@ def test_intact_checkpoint_carries_version_and_checksum(ckpt) -> None:
     sim, path = ckpt
     with xr.open_dataset(path, engine="netcdf4") as ds:
         ds.load()
-    assert ds.attrs["format"] == CHECKPOINT_FORMAT == "hugomap-md-checkpoint/2"
+    assert ds.attrs["format"] == MD_CHECKPOINT.format == "hugomap-md-checkpoint/2"
     assert ds.attrs["checksum"] == "sha256:" + checkpoint_checksum(ds)
     assert len(ds.attrs["checksum"]) == len("sha256:") + 64
     back = MDSimulation.load(path)
@@ -202,8 +203,8 @@ def test_window_checkpoint_roundtrip_and_refusals(tmp_path: Path) -> None:
     win = _window()
     path = win.save(tmp_path / "window.nc", attrs={"stage": "window"})
     with xr.open_dataset(path, engine="netcdf4") as ds:
-        assert ds.attrs["window_format"] == WINDOW_FORMAT
-        assert ds.attrs["format"] == CHECKPOINT_FORMAT
+        assert ds.attrs["window_format"] == MD_WINDOW_CHECKPOINT.format
+        assert ds.attrs["format"] == MD_CHECKPOINT.format
     back = MDWindow.load_path(path)
     assert np.array_equal(back.res_x, win.res_x) and np.array_equal(back.res_v, win.res_v)
     assert (back.u_in, back.u_out, back.x_face_in, back.x_face, back.next_id) == (

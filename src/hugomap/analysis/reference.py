@@ -46,9 +46,11 @@ import numpy as np
 import xarray as xr
 
 from .. import __version__
+from ..failures import SolverUnstable
 from ..md.potential import LJParams
 from ..md.sample import fcc_state, maxwell_velocities
-from ..md.simulation import MDSimulation, MDState, SolverUnstable
+from ..md.simulation import MDSimulation
+from ..md.state import MDState
 
 # Default liquid pole (a supercritical fluid that stays fluid under compression, see
 # shared/FACTS.md "Choosing the Lennard-Jones pole") and compressions ρ/ρ0.

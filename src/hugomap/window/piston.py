@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..analysis.shock import front_position
+from ..failures import StageFailed
 from ..md.profiles import fields_from_sums
 from .protocol import ShockSolver
 
@@ -74,15 +75,6 @@ class History:
         h.stage = list(map(int, a["stage"]))
         h.sums = [np.asarray(s) for s in a["sums"]]
         return h
-
-
-class StageFailed(RuntimeError):
-    """A stage ended without reaching its goal: ``status`` says which way."""
-
-    def __init__(self, status: str, diagnostic: str):
-        super().__init__(f"{status}: {diagnostic}")
-        self.status = status
-        self.diagnostic = diagnostic
 
 
 def start_piston(solver: ShockSolver, u_p: float) -> None:
