@@ -41,7 +41,7 @@ import xarray as xr  # noqa: E402
 
 from hugomap.analysis.stats import linear_hugoniot_fit  # noqa: E402
 from hugomap.campaign import reference_at  # noqa: E402
-from hugomap.status import FAILURES  # noqa: E402
+from hugomap.failures import FAILURES  # noqa: E402
 
 RESULTS = Path(os.environ.get("HUGOMAP_RESULTS", "results"))
 FIGURES = RESULTS / "figures" / "notebook"
@@ -53,7 +53,7 @@ print(f"{len(files)} scene(s) in {RESULTS / 'hugoniot'}:", [f.stem for f in file
 # ## The datasets
 # One file per scene, opened lazily (dask chunks); `status` says which points hold a
 # steady state (`ok`), which missed a jump-condition tolerance (`not_converged`), and which
-# failed (any other status: the cause is in `hugomap.status.FAILURES`).
+# failed (any other status: the cause is in `hugomap.failures.FAILURES`).
 
 # %%
 lazy = {f.stem: xr.open_dataset(f, chunks={}) for f in files}  # dask-backed

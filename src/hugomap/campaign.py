@@ -15,7 +15,7 @@ the workflow runs them with its usual rules. ``campaign_dataset`` joins the scen
 aggregates (``results/hugoniot/<scene>.nc``) into one flat dataset (dim ``point``) of
 dimensionless figures, the cases having different units: the relative errors of D and P from
 the scene's reference Hugoniot at the point's u_p, u_p/c0, the CPU cost [s], the status and
-its failure class (``status.FAILURES``); and the chart's markers (dim ``setting``: a case,
+its failure class (``failures.FAILURES``); and the chart's markers (dim ``setting``: a case,
 scheme and resolution over the piston velocities all its resolutions ran) with the Pareto
 fronts of cost against each error.
 """
@@ -394,7 +394,7 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
     Rayleigh line), NaN outside the reference's range.
     A failed point keeps its status, failure class and cause, and no value.
     """
-    from .status import FAILURES
+    from .failures import FAILURES
 
     rows: list[dict[str, Any]] = []
     cases: dict[str, dict] = {}

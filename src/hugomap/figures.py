@@ -219,10 +219,10 @@ def stability_map_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
     The strength panel holds the stability resolution's points (a row per scheme); each
     axis panel a row per axis value and scheme, the default value taken from the strength
     panel's points. Colour: the outcome (ok, not_converged, or the failure status, whose
-    class from ``status.FAILURES`` is in the legend); marker: the scheme."""
+    class from ``failures.FAILURES`` is in the legend); marker: the scheme."""
     import json
 
-    from .status import FAILURES
+    from .failures import FAILURES
 
     cases = json.loads(ds.attrs.get("cases", "{}"))
     axes_meta = json.loads(ds.attrs.get("axes", "{}"))

@@ -48,37 +48,6 @@ SCHEMES = ("piston", "amw", "mw", "dichotomy")  # every scheme the workflow know
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")  # those that start from the window checkpoint
 
 
-# Every status a stage may end with other than ok/not_converged, and its cause (issue 5's
-# failure labels): a point file carries one of these with a diagnostic, never a value.
-FAILURES: dict[str, tuple[str, str]] = {
-    "nan": ("unstable solver", "a position or velocity became NaN or infinite"),
-    "cfl": ("unstable solver", "an atom moved too far in one step (time step too large)"),
-    "atom_lost": ("unstable solver", "an atom escaped through a wall or the window"),
-    "particle_lost": ("unstable solver", "an SPH particle escaped through a wall or the window"),
-    "eos_range": ("unstable solver", "an SPH particle left the EOS's valid compression range"),
-    "dt_collapse": ("unstable solver", "the SPH time step collapsed"),
-    "bad_config": ("bad input", "the stored config cannot run this stage"),
-    "sample_too_short": ("piston", "the front reached the far end before the drive ended"),
-    "max_time": ("piston", "the front did not reach its target within the time limit"),
-    "no_front_speed": ("window set-up", "the loading stage gives no front speed"),
-    "too_few_samples": ("averaging", "too few profile samples for block averages"),
-    "no_inflow": ("window set-up", "no upstream material to cut the window from"),
-    "outflow_reversed": ("window set-up", "the outflow would flow into the window"),
-    "reservoir_energy": ("window set-up", "the inflow snapshot cannot reach the pole energy"),
-    "front_left_window": ("control", "the front left the window"),
-    "never_steady": ("control", "the slope of omega never stayed zero"),
-    "oscillating": ("control", "the front speed oscillates without decaying"),
-    "diverged": ("control", "the corrections grow (gain too large)"),
-    "too_noisy": (
-        "control",
-        "the averaging window (AMW, MW) or trial (dichotomy) cannot resolve the front speed",
-    ),
-    "no_shock": ("control", "MW lowered the amplitude to nothing: the held D is below c0"),
-    "bracket_not_found": ("dichotomy", "<domega/dt> kept one sign over every trial"),
-    "max_iterations": ("dichotomy", "the bracket was still too wide at the iteration limit"),
-}
-
-
 @dataclass
 class PointStatus:
     """The state of one point: one scheme at one piston velocity of one scene."""

@@ -4,7 +4,7 @@
 Set-up: 1D copper without strength (200 particles of 10 µm), u_p = 1000 m/s, the window
 (100 dx, front at 0.6 L) cut by ``window_start`` with ``window.start_offset = 0.02``: a frame
 2 % slower than the loading stage's D guess, so the front runs at ~110 m/s through the
-window until a scheme corrects it. Forced failures, one per cause (``status.FAILURES``):
+window until a scheme corrects it. Forced failures, one per cause (``failures.FAILURES``):
 
 - AMW β = 3: each shift overshoots by 2×, the slopes alternate and grow → ``diverged``;
 - AMW β = 2: each shift reverses the front speed exactly → ``oscillating``;
@@ -35,9 +35,9 @@ import xarray as xr
 from hugomap import stages as ps
 from hugomap.campaign import campaign_dataset
 from hugomap.config import validate_config
-from hugomap.stages import aggregate
+from hugomap.failures import FAILURES
 from hugomap.sph.window import SPHWindow
-from hugomap.status import FAILURES
+from hugomap.stages import aggregate
 
 pytestmark = pytest.mark.slow
 UP, OFFSET = 1000.0, 0.98

@@ -25,9 +25,9 @@ import pytest
 import xarray as xr
 
 from hugomap import stages
-from hugomap.md.reference import interpolate_P, reference_hugoniot
 from hugomap.config import validate_config
 from hugomap.md.potential import LJParams
+from hugomap.md.reference import interpolate_P, reference_hugoniot
 
 SCENE = {
     "solver": "md",

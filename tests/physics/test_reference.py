@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from hugomap.failures import SolverUnstable
 from hugomap.md import reference as ref
 from hugomap.md.potential import LJParams
-from hugomap.md.simulation import SolverUnstable
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 LJTS = LJParams(rc=2.5, shift=True, skin=0.3)

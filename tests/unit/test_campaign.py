@@ -3,7 +3,7 @@
 References: the expansion is checked against the overrides written in the test; the
 dataset's errors against the reference line the synthetic aggregates are built from (a point
 at D = 1.02 D_ref has err_D = 0.02 exactly, to rounding); the RMS of a setting and the Pareto
-fronts against values worked out by hand; the failure labels against ``status.FAILURES``.
+fronts against values worked out by hand; the failure labels against ``failures.FAILURES``.
 """
 
 from __future__ import annotations
@@ -20,11 +20,11 @@ import xarray as xr
 from hugomap import campaign as cp
 from hugomap.cli import main
 from hugomap.config import ConfigError, validate_config
+from hugomap.failures import FAILURES
 from hugomap.figures import stability_map_figure
 from hugomap.io.atomic import write_netcdf
 from hugomap.io.dataset import point_dataset
 from hugomap.stages import aggregate
-from hugomap.status import FAILURES
 
 C0, S = 3940.0, 1.49
 

@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from hugomap.io.checkpoint import MD_CHECKPOINT
 from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
-from hugomap.md.simulation import CHECKPOINT_FORMAT, MDSimulation, MDState
+from hugomap.md.simulation import MDSimulation
+from hugomap.md.state import MDState
 
 from ._reference import NO_JIT
 
@@ -106,7 +108,7 @@ def test_checkpoint_contents(tmp_path):
     sim.advance(10)
     path = sim.save(tmp_path / "c.nc", attrs={"note": "x"})
     with xr.open_dataset(path) as ds:
-        assert ds.attrs["format"] == CHECKPOINT_FORMAT
+        assert ds.attrs["format"] == MD_CHECKPOINT.format
         assert ds.attrs["step"] == 10 and ds.attrs["note"] == "x"
         np.testing.assert_array_equal(ds["x"].values, sim.state.x)
         np.testing.assert_array_equal(ds["walls0"].values, sim.state.walls0)

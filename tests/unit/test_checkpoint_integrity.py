@@ -21,17 +21,22 @@ import xarray as xr
 import yaml
 
 from hugomap import stages
+from hugomap.registry import backend_named
+from hugomap.stages import piston as piston_stage
+from hugomap.stages.files import history_of
+from hugomap.states import Pole
 from hugomap.config import validate_config
-from hugomap.md.potential import LJParams
-from hugomap.md.sample import fcc_state
-from hugomap.md.simulation import (
-    CHECKPOINT_FORMAT,
-    CheckpointError,
-    MDSimulation,
+from hugomap.failures import CheckpointError
+from hugomap.io.checkpoint import (
+    MD_CHECKPOINT,
+    MD_WINDOW_CHECKPOINT,
     checkpoint_checksum,
     read_checkpoint,
 )
-from hugomap.md.window import WINDOW_FORMAT, MDWindow, WindowGeometry
+from hugomap.md.potential import LJParams
+from hugomap.md.sample import fcc_state
+from hugomap.md.simulation import MDSimulation
+from hugomap.md.window import MDWindow, WindowGeometry
 
 from ._reference import one_numba_thread
 
@@ -89,7 +94,7 @@ def test_intact_checkpoint_carries_version_and_checksum(ckpt) -> None:
     sim, path = ckpt
     with xr.open_dataset(path, engine="netcdf4") as ds:
         ds.load()
-    assert ds.attrs["format"] == CHECKPOINT_FORMAT == "hugomap-md-checkpoint/2"
+    assert ds.attrs["format"] == MD_CHECKPOINT.format == "hugomap-md-checkpoint/2"
     assert ds.attrs["checksum"] == "sha256:" + checkpoint_checksum(ds)
     assert len(ds.attrs["checksum"]) == len("sha256:") + 64
     back = MDSimulation.load(path)
@@ -202,8 +207,8 @@ def test_window_checkpoint_roundtrip_and_refusals(tmp_path: Path) -> None:
     win = _window()
     path = win.save(tmp_path / "window.nc", attrs={"stage": "window"})
     with xr.open_dataset(path, engine="netcdf4") as ds:
-        assert ds.attrs["window_format"] == WINDOW_FORMAT
-        assert ds.attrs["format"] == CHECKPOINT_FORMAT
+        assert ds.attrs["window_format"] == MD_WINDOW_CHECKPOINT.format
+        assert ds.attrs["format"] == MD_CHECKPOINT.format
     back = MDWindow.load_path(path)
     assert np.array_equal(back.res_x, win.res_x) and np.array_equal(back.res_v, win.res_v)
     assert (back.u_in, back.u_out, back.x_face_in, back.x_face, back.next_id) == (
@@ -261,9 +266,9 @@ def piston_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
         loaded = stages.load_to_target(d / "sample.nc", scene, u_p, d / "loaded.nc")
         ref = stages.piston_point(loaded, scene, u_p, d / "ref.nc")
         assert not Path(str(ref) + ".part.nc").exists()  # removed once the point is written
-        real_drive = pipeline.drive
+        real_drive = piston_stage.drive
 
-        def killed_drive(sim, p, h, on_sample=None):
+        def killed_drive(sim, frame, profile, h, on_sample=None):
             n = [0]
 
             def hook() -> None:
@@ -272,14 +277,14 @@ def piston_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
                 if n[0] == 6:
                     raise Killed
 
-            real_drive(sim, p, h, on_sample=hook)
+            real_drive(sim, frame, profile, h, on_sample=hook)
 
-        pipeline.drive = killed_drive
+        piston_stage.drive = killed_drive
         try:
             with pytest.raises(Killed):
                 stages.piston_point(loaded, scene, u_p, d / "killed.nc")
         finally:
-            pipeline.drive = real_drive
+            piston_stage.drive = real_drive
     part = d / "killed.nc.part.nc"
     assert part.exists() and not (d / "killed.nc").exists()
     with xr.open_dataset(loaded) as ds:
@@ -307,13 +312,13 @@ def _rerun(run: dict, part: Path | None, monkeypatch, caplog) -> tuple[Path, lis
     fresh = d / ".rerun.nc.part.nc.a4b5c6.tmp"  # a write in progress (another sweep)
     fresh.write_bytes(b"CDF\x01 being written")
     starts = []
-    real_drive = pipeline.drive
+    real_drive = piston_stage.drive
 
-    def spy(sim, p, h, on_sample=None):
+    def spy(sim, frame, profile, h, on_sample=None):
         starts.append(sim.state.step)
-        real_drive(sim, p, h, on_sample=on_sample)
+        real_drive(sim, frame, profile, h, on_sample=on_sample)
 
-    monkeypatch.setattr(pipeline, "drive", spy)
+    monkeypatch.setattr(piston_stage, "drive", spy)
     caplog.clear()
     with caplog.at_level(logging.INFO, logger="hugomap"), one_numba_thread():
         stages.piston_point(run["loaded"], run["scene"], run["u_p"], out)
@@ -373,9 +378,10 @@ def _other_parent(p: Path) -> None:
     ds = read_checkpoint(p)
     sim = MDSimulation.from_dataset(ds)
     other = xr.Dataset(attrs={"checksum": "sha256:" + "0" * 64})
-    h = pipeline._history_from(ds)
+    h = history_of(ds)
     p.unlink()
-    pipeline.save_partial(sim, h, {}, json.loads(ds.attrs["cost"]), other, p)
+    piston_stage.save_partial(backend_named("md"), sim, h, Pole(rho0=0.8),
+                              json.loads(ds.attrs["cost"]), other, p)  # fmt: skip
 
 
 @pytest.mark.parametrize(

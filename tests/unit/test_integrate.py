@@ -31,7 +31,8 @@ import pytest
 from hugomap.md import integrate as ig
 from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
-from hugomap.md.simulation import MDSimulation, MDState
+from hugomap.md.simulation import MDSimulation
+from hugomap.md.state import MDState
 
 from . import _reference as ref
 from ._reference import EPS, NO_JIT

@@ -1,4 +1,4 @@
-"""Progress lines of long runs (issue 7): step, simulated time, fraction done and ETA.
+"""Progress lines of long runs: step, simulated time, fraction done and ETA.
 
 Reference: a front moving at constant speed towards a far wall that closes in — after half
 of the distance it had to go, half the drive is done and the ETA equals the time spent.
@@ -11,13 +11,12 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-
-from hugomap.pipeline import _log_progress
+from hugomap.stages.piston import log_progress as _log_progress
 
 
 class _Sim:
     def __init__(self, step: int, t: float, walls: tuple[float, float]):
-        self.state = SimpleNamespace(step=step)
+        self.steps = step
         self.time = t
         self._walls = walls
 
@@ -26,7 +25,7 @@ class _Sim:
 
 
 def test_progress_line_gives_fraction_and_eta(caplog):
-    p = SimpleNamespace(rear_margin=10.0)
+    p = SimpleNamespace(rear_margin=10.0, far_end=None)
     x_start: list = [None]
     h = SimpleNamespace(front=[20.0])
     with caplog.at_level(logging.INFO, logger="hugomap"):
@@ -37,14 +36,14 @@ def test_progress_line_gives_fraction_and_eta(caplog):
         _log_progress(_Sim(600, 5.0, (0.0, 90.0)), h, p, x_start, wall=25.0)
     lines = [r.getMessage() for r in caplog.records if "progress" in r.getMessage()]
     assert len(lines) == 2
-    assert "step 600" in lines[1] and "t = 5.000 tau" in lines[1]
+    assert "step 600" in lines[1] and "t = 5," in lines[1]
     assert "50 % of the drive" in lines[1] and "ETA 20 s" in lines[1]
 
 
 def test_no_line_without_a_front(caplog):
     h = SimpleNamespace(front=[np.nan])
     with caplog.at_level(logging.INFO, logger="hugomap"):
-        _log_progress(_Sim(1, 0.1, (0.0, 50.0)), h, SimpleNamespace(rear_margin=5.0), [None], 1.0)
+        _log_progress(_Sim(1, 0.1, (0.0, 50.0)), h, SimpleNamespace(rear_margin=5.0, far_end=None), [None], 1.0)
     assert not [r for r in caplog.records if "progress" in r.getMessage()]
 
 

@@ -16,9 +16,10 @@ import numpy as np
 import pytest
 
 from hugomap.eos import copper
+from hugomap.failures import SPHUnstable
 from hugomap.sph import csph
 from hugomap.sph.neighbors import build_list, cell_grid, sort_by_cell
-from hugomap.sph.simulation import CSPHSimulation, SPHUnstable, profile_fields
+from hugomap.sph.simulation import CSPHSimulation, profile_fields
 from hugomap.sph.state import SPHState
 from hugomap.strength import copper as copper_strength
 

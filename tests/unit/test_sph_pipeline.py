@@ -1,9 +1,10 @@
-"""The CSPH stages' pure parts (``pipeline_sph``) and the CSPH checkpoint.
+"""The CSPH backend's pure parts (``sph.backend``) and the CSPH checkpoint.
 
 References: the exact Hugoniot of the Mie–Grüneisen EOS referenced to D = c0 + s u_p (copper,
 LASL) satisfies the three jump conditions exactly (residuals 0 to round-off); a slab's mean
-density in 2D counts the pores (Σm over the geometric area); the SI units table; a CSPH
-checkpoint continues bit for bit (exact equality with the uninterrupted run).
+density in 2D counts the pores (Σm over the geometric area); the front of a sharp step lies on
+the step (the change-point tracker's refinement is exact for a step); the SI units table; a
+CSPH checkpoint continues bit for bit (exact equality with the uninterrupted run).
 """
 
 from __future__ import annotations
@@ -15,8 +16,12 @@ import pytest
 import xarray as xr
 
 from hugomap.analysis.porous import COPPER, porous_hugoniot_from_up, snowplow_hugoniot
-from hugomap.io.dataset import POINT_VARS, solver_tables
-from hugomap.pipeline_sph import front_position, jump, jump_with_errors, reference_stage, slab_state
+from hugomap.analysis.shock import bin_edges, jump_residual_errors, jump_residuals, slab_state
+from hugomap.analysis.shock import track_front
+from hugomap.io.dataset import POINT_VARS
+from hugomap.md.backend import MDBackend
+from hugomap.sph.backend import CSPHBackend, SPHProfile
+from hugomap.stages import reference_stage
 
 RHO0, C0, S = 8930.0, 3940.0, 1.49
 
@@ -24,9 +29,7 @@ RHO0, C0, S = 8930.0, 3940.0, 1.49
 @pytest.mark.parametrize("up", [100.0, 1000.0, 2000.0])
 def test_exact_hugoniot_has_zero_residuals(up):
     D = C0 + S * up
-    one = {"rho": RHO0, "u": 0.0, "P": 0.0, "E": 0.0}
-    two = {"rho": RHO0 * D / (D - up), "u": up, "P": RHO0 * D * up, "E": 0.5 * up * up}
-    r = jump(D, one, two)
+    r = jump_residuals(RHO0, 0.0, 0.0, D, up, RHO0 * D / (D - up), RHO0 * D * up, 0.5 * up * up)
     assert max(abs(v) for v in r.values()) < 1e-12
     # from a precursor state: the jump from (1) to (2) with D relative to the lab
     u1, P1, rho1 = 20.0, 0.3e9, RHO0 * 1.004
@@ -35,19 +38,18 @@ def test_exact_hugoniot_has_zero_residuals(up):
     rho2 = j / (D - up)
     P2 = P1 + j * (up - u1)
     E2 = E1 + 0.5 * (P1 + P2) * (1 / rho1 - 1 / rho2)
-    r2 = jump(D, {"rho": rho1, "u": u1, "P": P1, "E": E1},
-              {"rho": rho2, "u": up, "P": P2, "E": E2})  # fmt: skip
+    r2 = jump_residuals(rho1, P1, E1, D, up, rho2, P2, E2, u1=u1)
     assert max(abs(v) for v in r2.values()) < 1e-12
 
 
 def test_residual_errors_propagate():
     D, up = 5430.0, 1000.0
-    one = {"rho": RHO0, "u": 0.0, "P": 0.0, "E": 0.0}
-    two = {"rho": RHO0 * D / (D - up), "u": up, "P": RHO0 * D * up, "E": 0.5 * up * up}
-    r = jump_with_errors(D, 0.01 * D, one, {}, two, {"P": 0.0})
+    vals = dict(rho1=RHO0, P1=0.0, E1=0.0, D=D, u=up, rho=RHO0 * D / (D - up),
+                P=RHO0 * D * up, E=0.5 * up * up, u1=0.0)  # fmt: skip
+    r = jump_residual_errors(vals, {"D": 0.01 * D})
     # d(mass residual)/dD · σ_D: ρ2(D − u)/(ρ1 D) changes by about u/(D − u)·σ_D/D
-    assert r["residual_mass_err"] == pytest.approx(0.01 * up / (D - up), rel=0.05)
-    assert r["residual_energy_err"] == 0.0
+    assert r["mass"] == pytest.approx(0.01 * up / (D - up), rel=0.05)
+    assert r["energy"] == 0.0
 
 
 def test_slab_state_counts_pores_in_2d():
@@ -60,27 +62,32 @@ def test_slab_state_counts_pores_in_2d():
     sums[:, 3] = m * 50.0  # u = 50 m/s
     sums[:, 6] = vol * -1e9  # σ_xx = −1 GPa in the matrix
     sums[:, 8] = vol * 0.9e9
-    s2 = slab_state(sums, 0.0, w, 0.0, 2e-5, depth)
+    p2 = SPHProfile(0.0, w, depth)
+    s2 = slab_state(p2, sums, bin_edges(p2, 2), 0.0, 2e-5)
     assert s2["rho"] == pytest.approx(0.75 * rho_s)
     assert s2["P"] == pytest.approx(0.75e9)  # the section's mean stress: pores carry none
     assert s2["u"] == pytest.approx(50.0)
-    s1 = slab_state(sums, 0.0, w, 0.0, 2e-5)  # 1D meaning: the matrix itself
+    p1 = SPHProfile(0.0, w, None)  # 1D meaning: the matrix itself
+    s1 = slab_state(p1, sums, bin_edges(p1, 2), 0.0, 2e-5)
     assert s1["rho"] == pytest.approx(rho_s) and s1["P"] == pytest.approx(1e9)
 
 
-def test_front_position_interpolates():
-    f = {"u": np.array([100.0, 100.0, 60.0, 20.0, 0.0])}
-    # u crosses 50 between bin 2 (centre 2.5 dx, 60) and bin 3 (3.5 dx, 20): at 2.75 dx
-    assert front_position(f, 0.0, 1.0, 100.0, 0.0) == pytest.approx(2.75)
-    # window frame: upstream at u_in = −5000 ahead, u_out = −4000 behind
-    g = {"u": np.array([-4000.0, -4000.0, -5000.0, -5000.0])}
-    assert front_position(g, 0.0, 1.0, -4000.0, -5000.0) == pytest.approx(2.0)
+def test_front_of_a_step_lies_on_the_step():
+    """Bins 0-3 move at u_p = 100 m/s, bins 4-9 are at rest: the front is at the edge of
+    bin 4; in the window frame (u_out = −4000 behind, u_in = −5000 ahead) the same."""
+    for behind, ahead in ((100.0, 0.0), (-4000.0, -5000.0)):
+        sums = np.zeros((10, 10))
+        sums[:, 0], sums[:, 1], sums[:, 2] = 2, 1.0, 1e-4
+        sums[:, 3] = np.where(np.arange(10) < 4, behind, ahead)
+        prof = SPHProfile(0.0, 1.0, None)
+        assert track_front(prof, sums, 0.0, 10.0, behind, ahead) == pytest.approx(4.0)
 
 
 def test_units_tables():
-    md_point, md_pole, md_axes = solver_tables("md")
-    assert md_point is POINT_VARS and md_axes["velocity"] == "sigma tau^-1"
-    point, pole, axes = solver_tables("csph")
+    md = MDBackend().units
+    assert md.point is POINT_VARS and md.axes["velocity"] == "sigma tau^-1"
+    u = CSPHBackend().units
+    point, pole, axes = u.point, u.pole, u.axes
     assert point["D"][0] == "m s^-1" and point["P"][0] == "Pa" and point["rho"][0] == "kg m^-3"
     assert point["V"][0] == "m^3 kg^-1" and point["E"][0] == "J kg^-1"
     assert "mass density" in point["rho"][1] and pole["rho0"][0] == "kg m^-3"

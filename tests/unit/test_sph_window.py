@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from hugomap.eos import copper
-from hugomap.md.simulation import CheckpointError
+from hugomap.failures import CheckpointError
 from hugomap.sph.simulation import CSPHSimulation
 from hugomap.sph.state import SPHState
 from hugomap.sph.window import SPHWindow

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from hugomap.eos import copper
-from hugomap.md.simulation import CheckpointError
+from hugomap.failures import CheckpointError
 from hugomap.sph.sample import SampleError, porous_tile_2d
 from hugomap.sph.simulation import CSPHSimulation
 from hugomap.sph.state import SPHState

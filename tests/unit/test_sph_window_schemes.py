@@ -26,8 +26,8 @@ import xarray as xr
 
 from hugomap import stages as ps
 from hugomap.config import validate_config
+from hugomap.failures import FAILURES
 from hugomap.sph.window import SPHWindow
-from hugomap.status import FAILURES
 
 C0, S, UP = 3940.0, 1.49, 1000.0
 OFFSET = 0.98  # the window's frame speed: this fraction of the loading stage's D guess

@@ -344,7 +344,7 @@ def test_window_schemes(tmp_path: Path) -> None:
     (logs / "up2.5/mw.log").write_text("Traceback (most recent call last):\nKeyError: 'u'\n")
     write_json(state | {"k": 0}, sc / "up2.5/dichotomy/state0.json")
     (logs / "up2.5/dichotomy_trial0_0.log").write_text(
-        "Traceback (most recent call last):\nhugomap.md.simulation.CheckpointError: refused\n"
+        "Traceback (most recent call last):\nhugomap.failures.CheckpointError: refused\n"
     )
     # up3: MW not started (an old log from before the window was cut again); the loop ended
     # without a root
@@ -376,7 +376,7 @@ def test_window_schemes(tmp_path: Path) -> None:
     assert mw["2.5"]["diagnostic"] == "job crashed (mw.log): KeyError: 'u'"
     assert dich["2.5"]["state"] == "failed"
     assert dich["2.5"]["diagnostic"] == (
-        "job crashed (dichotomy_trial0_0.log): hugomap.md.simulation.CheckpointError: refused"
+        "job crashed (dichotomy_trial0_0.log): hugomap.failures.CheckpointError: refused"
     )
     assert (mw["3"]["state"], mw["3"]["status"]) == ("pending", "window")
     assert (dich["3"]["state"], dich["3"]["status"]) == ("failed", "max_iterations")
@@ -408,10 +408,10 @@ def test_window_schemes(tmp_path: Path) -> None:
 def test_every_failure_status_the_code_emits_is_registered():
     """Each status a stage can end with (the first argument of WindowError, SolverUnstable,
     StageFailed, a failed ControlResult, a dichotomy _finish) has a cause in
-    ``status.FAILURES``: the failure labels of the stability map cannot miss one."""
+    ``failures.FAILURES``: the failure labels of the stability map cannot miss one."""
     import re
 
-    from hugomap.status import FAILURES
+    from hugomap.failures import FAILURES
 
     src = Path(__file__).resolve().parents[2] / "src" / "hugomap"
     pattern = re.compile(

@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from hugomap.failures import SolverUnstable
 from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
-from hugomap.md.simulation import MDSimulation, MDState, SolverUnstable
+from hugomap.md.simulation import MDSimulation
+from hugomap.md.state import MDState
 
 
 def _gas(v0, walls0=(0.0, 0.0, 10.0, 0.0), dt=0.005):

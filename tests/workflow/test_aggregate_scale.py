@@ -139,9 +139,9 @@ def test_aggregate_thousands_of_points_in_bounded_memory(points, tmp_path: Path)
     out = tmp_path / "hugoniot" / "scale.nc"
     args = ["aggregate", "--scene-name", "scale", "--config-json", "{}", "--out", str(out)]
     (tmp_path / "args.json").write_text(json.dumps([*args, *map(str, paths)]))
-    # hugomap.cli and hugomap.pipeline are imported before the baseline is taken.
+    # hugomap.cli and hugomap.stages are imported before the baseline is taken.
     r = subprocess.run(
-        [sys.executable, "-c", "import hugomap.pipeline\n" + MEASURE, str(tmp_path / "args.json")],
+        [sys.executable, "-c", "import hugomap.stages\n" + MEASURE, str(tmp_path / "args.json")],
         capture_output=True,
         text=True,
         timeout=600,

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from hugomap.status import FAILURES
+from hugomap.failures import FAILURES
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "tests" / "workflow" / "tiny_campaign" / "config.yaml"

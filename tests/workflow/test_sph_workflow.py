@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 import xarray as xr
 
-from hugomap.status import FAILURES
+from hugomap.failures import FAILURES
 
 ROOT = Path(__file__).resolve().parents[2]
 TINY_CU = ROOT / "tests" / "workflow" / "tiny_cu" / "config.yaml"

@@ -47,9 +47,11 @@ import xarray as xr
 
 from .. import __version__
 from ..analysis import stats
+from ..failures import SolverUnstable
 from .potential import LJParams
 from .sample import fcc_state, maxwell_velocities
-from .simulation import MDSimulation, MDState, SolverUnstable
+from .simulation import MDSimulation
+from .state import MDState
 
 # Default liquid pole (a supercritical fluid that stays fluid under compression, see
 # shared/FACTS.md "Choosing the Lennard-Jones pole") and compressions ρ/ρ0.

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .simulation import MDState
+from .state import MDState
 
 _BASIS = np.array([[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]])
 

@@ -1,213 +1,33 @@
-"""The LJ molecular-dynamics simulation: state, time loop driver, samples, checkpoints.
+"""The LJ molecular-dynamics simulation (``MDSimulation``): time loop, walls, observables and
+its checkpoint.
 
-``MDSimulation`` owns its state (a dataclass of arrays) and its time loop; the shock methods
+``MDSimulation`` owns its state (an ``md.state.MDState``) and its time loop; the shock methods
 drive it through ``advance``, ``set_walls``, ``galilean_shift``, ``profile_sums`` and
-``save``/``load``. Reduced LJ units throughout (σ, ε, m, τ = σ√(m/ε), k_B = 1).
+``save``/``load``. Its checkpoint is an ``io.checkpoint.MD_CHECKPOINT`` (format version and
+checksum). Reduced LJ units throughout (σ, ε, m, τ = σ√(m/ε), k_B = 1).
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from .. import __version__
+from ..failures import SolverUnstable
 from ..io.atomic import write_netcdf
+from ..io.checkpoint import MD_CHECKPOINT, read_checkpoint, seal_checkpoint, verify_checkpoint
 from ..numba_conf import num_threads
 from . import integrate as ig
 from .forces import energy_virial_full
 from .neighbor import build_full_list, cell_of, counting_sort, grid_shape
 from .potential import LJParams
 from .profiles import SUM_FIELDS, bin_sums
-
-CHECKPOINT_FORMAT = "hugomap-md-checkpoint/2"  # /2: a SHA-256 checksum (attribute ``checksum``)
-CHECKPOINT_FAMILY = "hugomap-md-checkpoint/"
-UNCHECKED_FORMATS = ("hugomap-md-checkpoint/1",)  # written before checkpoints had checksums
-CHECKSUM_ATTR = "checksum"
-
-
-class CheckpointError(ValueError):
-    """A checkpoint that must not be used: unreadable, foreign, too old, or altered.
-
-    ``source`` names the file (or says the dataset was built in memory), ``problem`` what is
-    wrong with it; the message gives both.
-    """
-
-    def __init__(self, source: str, problem: str):
-        super().__init__(f"refused checkpoint {source}: {problem}")
-        self.source = source
-        self.problem = problem
-
-
-def _canonical_bytes(value: object) -> bytes:
-    """The bytes that stand for an array or attribute value in the checksum.
-
-    Numbers are widened to little-endian float64 / int64 and every NaN is the same NaN, so
-    the bytes do not depend on how netCDF stored the value (an int8 flag array, a 1-element
-    list attribute read back as a scalar, a NaN's payload) but change with any value; text
-    is UTF-8. The kind, shape and length are part of the bytes.
-    """
-    if isinstance(value, str):
-        raw = value.encode()
-        return b"s" + len(raw).to_bytes(8, "little") + raw
-    a = np.asarray(value)
-    if a.dtype.kind in "USO":
-        raw = "\x1f".join(str(x) for x in a.ravel()).encode()
-        head = b"S"
-    elif a.dtype.kind == "f":
-        f = np.ascontiguousarray(a, dtype="<f8")
-        raw = np.where(np.isnan(f), np.nan, f).astype("<f8").tobytes()
-        head = b"f"
-    elif a.dtype.kind in "iub":
-        raw = np.ascontiguousarray(a, dtype="<i8").tobytes()
-        head = b"i"
-    else:
-        raise TypeError(f"cannot checksum values of dtype {a.dtype}")
-    shape = np.asarray(a.shape if a.ndim > 0 else (1,), dtype="<i8").tobytes()
-    return head + len(shape).to_bytes(8, "little") + shape + len(raw).to_bytes(8, "little") + raw
-
-
-def checkpoint_checksum(ds: xr.Dataset) -> str:
-    """SHA-256 (hex) over every variable of a checkpoint (name, kind, shape, values) and every
-    global attribute except ``checksum`` itself, in name order: the state arrays (x, v, f,
-    x_ref, ids, L, periodic, walls0, impulse; res_x, res_v of a window), the extra variables
-    (history, pole) and the attributes (format, clock, time step, potential, thermostat...)."""
-    h = hashlib.sha256()
-    for name in sorted(map(str, ds.variables)):
-        h.update(b"var" + _canonical_bytes(name) + _canonical_bytes(ds[name].values))
-    for name in sorted(k for k in map(str, ds.attrs) if k != CHECKSUM_ATTR):
-        h.update(b"attr" + _canonical_bytes(name) + _canonical_bytes(ds.attrs[name]))
-    return h.hexdigest()
-
-
-def seal_checkpoint(ds: xr.Dataset) -> xr.Dataset:
-    """Set ``ds``'s format version and checksum attributes (in place); return ``ds``.
-
-    Call it last, once every variable and attribute of the checkpoint is in place."""
-    ds.attrs["format"] = CHECKPOINT_FORMAT
-    ds.attrs[CHECKSUM_ATTR] = "sha256:" + checkpoint_checksum(ds)
-    return ds
-
-
-def _source(ds: xr.Dataset, source: str | os.PathLike | None) -> str:
-    if source is not None:
-        return str(source)
-    return str(ds.encoding.get("source", "(in-memory dataset)"))
-
-
-def verify_checkpoint(ds: xr.Dataset, source: str | os.PathLike | None = None) -> None:
-    """Refuse (``CheckpointError``) a dataset that is not an intact checkpoint of this format.
-
-    Foreign (no or another ``format``), older (written before checksums), newer, without a
-    checksum, or whose checksum does not match its contents: edited, truncated, bit-flipped.
-    ``source`` names the file in the message (default: the file ``ds`` was opened from).
-    """
-    where = _source(ds, source)
-    fmt = ds.attrs.get("format")
-    if not isinstance(fmt, str) or not fmt.startswith(CHECKPOINT_FAMILY):
-        raise CheckpointError(where, f"not an MD checkpoint (format {fmt!r})")
-    if fmt in UNCHECKED_FORMATS:
-        raise CheckpointError(
-            where,
-            f"format {fmt!r} predates checkpoint checksums, so it cannot be checked; "
-            "delete it and rerun the stage that wrote it",
-        )
-    if fmt != CHECKPOINT_FORMAT:
-        raise CheckpointError(
-            where, f"unsupported format version {fmt!r} (this hugomap reads {CHECKPOINT_FORMAT!r})"
-        )
-    stored = ds.attrs.get(CHECKSUM_ATTR)
-    if not isinstance(stored, str) or not stored.startswith("sha256:"):
-        raise CheckpointError(where, f"no valid {CHECKSUM_ATTR!r} attribute ({stored!r})")
-    try:
-        actual = "sha256:" + checkpoint_checksum(ds)
-    except (TypeError, ValueError) as exc:
-        raise CheckpointError(where, f"contents cannot be checksummed: {exc}") from exc
-    if actual != stored:
-        raise CheckpointError(
-            where,
-            f"checksum mismatch (stored {stored[:19]}..., contents give {actual[:19]}...): "
-            "the file was altered or corrupted after it was written",
-        )
-
-
-def read_checkpoint(path: str | os.PathLike, verify: bool = True) -> xr.Dataset:
-    """Read a checkpoint file into memory and (``verify``) check it with ``verify_checkpoint``.
-
-    An unreadable file (truncated, not netCDF, missing) is refused with ``CheckpointError``."""
-    try:
-        with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds.load()
-    except (OSError, ValueError, RuntimeError) as exc:
-        raise CheckpointError(str(path), f"unreadable ({type(exc).__name__}: {exc})") from exc
-    if verify:
-        verify_checkpoint(ds, path)
-    return ds
-
-
-class SolverUnstable(RuntimeError):
-    """The solver stopped: ``status`` names why (nan, cfl, atom_lost, ...), ``diagnostic`` how."""
-
-    def __init__(self, status: str, diagnostic: str):
-        super().__init__(f"{status}: {diagnostic}")
-        self.status = status
-        self.diagnostic = diagnostic
-
-
-@dataclass
-class MDState:
-    """Complete dynamical state of an MD run (arrays of shape (n, 3) unless stated).
-
-    x, v, f: positions [σ], velocities [σ/τ], forces [ε/σ]; ids (n,) stable atom labels;
-    x_ref: positions at the last neighbour-list build; L (3,) box lengths [σ]; periodic (3,)
-    bool; walls0 (4,) = [x_L0, v_L, x_R0, v_R] so that wall k sits at x_k0 + v_k t;
-    time [τ]; step; impulse (2,) x-momentum given by the left/right wall [m σ/τ];
-    epoch_time [τ], epoch_step: the time and step at which the current Δt was set, so that
-    time = epoch_time + (step − epoch_step) Δt is computed the same way however a run is split
-    (a float sum of chunks would not be bit-for-bit, and the wall positions depend on it);
-    ref_velocity [σ/τ], ref_shift [σ]: the uniform x drift discounted from the list-rebuild
-    displacement test, and that drift since the last build (``integrate.run_steps``).
-    """
-
-    x: np.ndarray
-    v: np.ndarray
-    L: np.ndarray
-    periodic: np.ndarray
-    walls0: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 0.0, 0.0]))
-    f: np.ndarray | None = None
-    ids: np.ndarray | None = None
-    x_ref: np.ndarray | None = None
-    time: float = 0.0
-    step: int = 0
-    impulse: np.ndarray = field(default_factory=lambda: np.zeros(2))
-    epoch_time: float = 0.0
-    epoch_step: int = 0
-    ref_velocity: float = 0.0
-    ref_shift: float = 0.0
-
-    def __post_init__(self) -> None:
-        n = self.x.shape[0]
-        self.x = np.ascontiguousarray(self.x, dtype=np.float64)
-        self.v = np.ascontiguousarray(self.v, dtype=np.float64)
-        self.L = np.asarray(self.L, dtype=np.float64)
-        self.periodic = np.asarray(self.periodic, dtype=np.bool_)
-        self.walls0 = np.asarray(self.walls0, dtype=np.float64)
-        if self.f is None:
-            self.f = np.zeros((n, 3))
-        if self.ids is None:
-            self.ids = np.arange(n, dtype=np.int64)
-        if self.x_ref is None:
-            self.x_ref = self.x.copy()
-
-    @property
-    def n(self) -> int:
-        return int(self.x.shape[0])
+from .state import MDState
 
 
 class MDSimulation:
@@ -502,7 +322,7 @@ class MDSimulation:
         if extra is not None:
             ds = ds.merge(extra)
         ds.attrs.update(
-            format=CHECKPOINT_FORMAT,
+            format=MD_CHECKPOINT.format,
             time=float(s.time),
             step=int(s.step),
             epoch_time=float(s.epoch_time),

@@ -58,30 +58,20 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..failures import SolverUnstable, WindowError
 from ..io.atomic import write_netcdf
-from .potential import LJParams
-from .sample import fcc_state
-from .simulation import (
-    CheckpointError,
-    MDSimulation,
-    MDState,
-    SolverUnstable,
+from ..io.checkpoint import (
+    MD_WINDOW_CHECKPOINT,
     read_checkpoint,
     seal_checkpoint,
     verify_checkpoint,
 )
+from .potential import LJParams
+from .sample import fcc_state
+from .simulation import MDSimulation
+from .state import MDState
 
-WINDOW_FORMAT = "hugomap-md-window/2"  # /2: inside a checksummed MD checkpoint (format /2)
 MARGIN = 2.0  # σ of empty box beyond the frozen layers
-
-
-class WindowError(RuntimeError):
-    """The window cannot be set up or cannot go on: ``status`` says which way."""
-
-    def __init__(self, status: str, diagnostic: str):
-        super().__init__(f"{status}: {diagnostic}")
-        self.status = status
-        self.diagnostic = diagnostic
 
 
 @dataclass
@@ -492,7 +482,7 @@ class MDWindow:
         ds["res_v"] = (("res_atom", "xyz"), self.res_v.copy(), {"units": "sigma tau^-1",
                        "long_name": "reservoir snapshot thermal velocities"})  # fmt: skip
         ds.attrs.update(
-            window_format=WINDOW_FORMAT,
+            window_format=MD_WINDOW_CHECKPOINT.format,
             window_geometry=json.dumps(asdict(self.geom)),
             window_state=json.dumps(
                 {
@@ -512,7 +502,7 @@ class MDWindow:
                 }
             ),  # fmt: skip
         )
-        return seal_checkpoint(ds)  # again: the checksum covers the window's part too
+        return seal_checkpoint(ds, MD_WINDOW_CHECKPOINT)  # the checksum covers the window too
 
     def save(
         self, path: str | os.PathLike, extra: xr.Dataset | None = None, attrs: dict | None = None
@@ -524,16 +514,7 @@ class MDWindow:
     def from_dataset(cls, ds: xr.Dataset, source: str | os.PathLike | None = None) -> MDWindow:
         """Rebuild a window saved by ``save``; a foreign, outdated or altered checkpoint is
         refused with ``CheckpointError`` naming ``source`` (default: the file of ``ds``)."""
-        verify_checkpoint(ds, source)
-        if ds.attrs.get("window_format") != WINDOW_FORMAT:
-            where = (
-                source if source is not None else ds.encoding.get("source", "(in-memory dataset)")
-            )
-            raise CheckpointError(
-                str(where),
-                f"not an MD window checkpoint (window_format {ds.attrs.get('window_format')!r},"
-                f" this hugomap reads {WINDOW_FORMAT!r})",
-            )
+        verify_checkpoint(ds, source, MD_WINDOW_CHECKPOINT)
         sim = MDSimulation.from_dataset(ds, source)
         geom = WindowGeometry(**json.loads(ds.attrs["window_geometry"]))
         st = json.loads(ds.attrs["window_state"])

@@ -4,7 +4,7 @@ A checkpoint is a netCDF dataset holding every array of ``CSPHSimulation.checkpo
 (state, walls, neighbour list and its reference positions), the solver's scalars and
 parameters (EOS and strength with their sources, θ, C, k_comp, walls present, periodicity,
 gradient correction, ``dev_mean``), optional extra variables (the pole, the front history) and
-a SHA-256 checksum (``md.simulation.checkpoint_checksum``) over all of it. ``load_simulation``
+a SHA-256 checksum over all of it: an ``io.checkpoint.CSPH_CHECKPOINT``. ``load_simulation``
 refuses a foreign, altered or truncated file with ``CheckpointError`` naming it, and the
 continuation of a loaded run is bit for bit the uninterrupted one (same thread count).
 """
@@ -20,11 +20,9 @@ import xarray as xr
 
 from ..eos import EOS
 from ..io.atomic import write_netcdf
-from ..md.simulation import CheckpointError, checkpoint_checksum
+from ..io.checkpoint import CSPH_CHECKPOINT, read_checkpoint, seal_checkpoint, verify_checkpoint
 from ..strength import Strength
 from .simulation import CSPHSimulation
-
-SIM_FORMAT = "hugomap-sph-checkpoint/1"
 
 
 def solver_params(sim: CSPHSimulation) -> dict:
@@ -44,7 +42,8 @@ def solver_params(sim: CSPHSimulation) -> dict:
 def to_dataset(
     sim: CSPHSimulation, extra: xr.Dataset | None = None, attrs: dict | None = None
 ) -> xr.Dataset:
-    """The checkpoint of ``sim`` with ``extra`` variables and ``attrs``, checksummed."""
+    """The checkpoint of ``sim`` with ``extra`` variables and ``attrs``, sealed
+    (``io.checkpoint.seal_checkpoint``: format version and checksum)."""
     data = {}
     for k, a in sim.checkpoint_arrays().items():
         a = a.astype(np.int8) if a.dtype == np.bool_ else a
@@ -54,12 +53,11 @@ def to_dataset(
         ds = xr.merge([ds, extra])
     ds.attrs.update(attrs or {})
     ds.attrs.update(
-        sim_format=SIM_FORMAT,
+        sim_format=CSPH_CHECKPOINT.format,
         sim_scalars=json.dumps(sim.checkpoint_scalars()),
         sim_solver=json.dumps(solver_params(sim)),
     )
-    ds.attrs["checksum"] = "sha256:" + checkpoint_checksum(ds)
-    return ds
+    return seal_checkpoint(ds, CSPH_CHECKPOINT)
 
 
 def save_simulation(
@@ -73,14 +71,9 @@ def save_simulation(
 
 
 def from_dataset(ds: xr.Dataset, source: str | os.PathLike | None = None) -> CSPHSimulation:
-    """Rebuild the simulation saved in ``ds``; ``CheckpointError`` if foreign or altered."""
-    where = str(source if source is not None else ds.encoding.get("source", "(in memory)"))
-    if ds.attrs.get("sim_format") != SIM_FORMAT:
-        raise CheckpointError(
-            where, f"not a CSPH checkpoint (format {ds.attrs.get('sim_format')!r})"
-        )
-    if ds.attrs.get("checksum") != "sha256:" + checkpoint_checksum(ds):
-        raise CheckpointError(where, "checksum mismatch: the file was altered or truncated")
+    """Rebuild the simulation saved in ``ds``; ``CheckpointError`` naming ``source`` (default:
+    the file ``ds`` was opened from) if it is foreign or altered."""
+    verify_checkpoint(ds, source, CSPH_CHECKPOINT)
     sol = json.loads(ds.attrs["sim_solver"])
     sc = json.loads(ds.attrs["sim_scalars"])
     arrays = {k[4:]: ds[k].values for k in ds.data_vars if k.startswith("sim_")}
@@ -109,7 +102,7 @@ def from_dataset(ds: xr.Dataset, source: str | os.PathLike | None = None) -> CSP
 
 
 def load_simulation(path: str | os.PathLike) -> tuple[CSPHSimulation, xr.Dataset]:
-    """(simulation, dataset) of a checkpoint file (the dataset holds the extra variables)."""
-    with xr.open_dataset(path, engine="netcdf4") as ds:
-        ds.load()
+    """(simulation, dataset) of a checkpoint file (the dataset holds the extra variables); an
+    unreadable, foreign or altered file raises ``CheckpointError`` naming it."""
+    ds = read_checkpoint(path, verify=False)
     return from_dataset(ds, path), ds

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..eos import EOS
 from ..eos.mie_gruneisen import ETA_MAX_FRACTION
-from ..md.simulation import SolverUnstable
+from ..failures import SPHUnstable
 from ..strength import Strength, hydrodynamic
 from . import csph
 from .neighbors import build_list, cell_grid, sort_by_cell
@@ -68,11 +68,6 @@ def profile_fields(sums: np.ndarray) -> dict[str, np.ndarray]:
             "sxx": s[:, 6] / vol, "syy": s[:, 7] / vol, "P": s[:, 8] / vol,
             "e": s[:, 5] / m, "eps_p": s[:, 9] / m,
         }  # fmt: skip
-
-
-class SPHUnstable(SolverUnstable):
-    """The CSPH run stopped: ``status`` (nan, eos_range, particle_lost, dt_collapse) and
-    ``diagnostic`` (where and how)."""
 
 
 class CSPHSimulation:

@@ -14,14 +14,19 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..failures import SPHUnstable
 from ..io.atomic import write_netcdf
-from ..md.simulation import CheckpointError
+from ..io.checkpoint import (
+    CSPH_WINDOW_2D_CHECKPOINT,
+    CSPH_WINDOW_CHECKPOINT,
+    checkpoint_source,
+    read_checkpoint,
+    verify_checkpoint,
+)
 from . import checkpoint as ckpt
-from .simulation import CSPHSimulation, SPHUnstable, _threads_for
+from .simulation import CSPHSimulation, _threads_for
 from .state import SPHState
 
-# /2: the simulation inside is an ``sph.checkpoint`` (format hugomap-sph-checkpoint/1)
-WINDOW_FORMAT = "hugomap-sph-window/2"
 #: The per-particle arrays of an ``SPHState`` that the boundaries cut and extend.
 STATE_ARRAYS = ("x", "v", "m", "rho", "e", "S", "eps_p", "l")
 
@@ -282,7 +287,7 @@ class SPHWindow:
                   "m0": self.m0}  # fmt: skip
         return ckpt.to_dataset(
             self.sim,
-            attrs={**(attrs or {}), "window_format": WINDOW_FORMAT,
+            attrs={**(attrs or {}), "window_format": CSPH_WINDOW_CHECKPOINT.format,
                    "geometry": json.dumps(asdict(self.geom)), "window": json.dumps(window)},
         )  # fmt: skip
 
@@ -294,13 +299,10 @@ class SPHWindow:
     def from_dataset(cls, ds: xr.Dataset, source: str | os.PathLike | None = None) -> SPHWindow:
         """Rebuild a window saved by ``save``; a foreign or altered file raises
         ``CheckpointError`` naming ``source``."""
-        where = str(source if source is not None else ds.encoding.get("source", "(in memory)"))
-        if cls is SPHWindow and ds.attrs.get("window_format") == WINDOW_FORMAT_2D:
+        where = checkpoint_source(ds, source)
+        if cls is SPHWindow and ds.attrs.get("window_format") == CSPH_WINDOW_2D_CHECKPOINT.format:
             return SPHWindow2D.from_dataset(ds, source)
-        if ds.attrs.get("window_format") != WINDOW_FORMAT:
-            raise CheckpointError(
-                where, f"not an SPH window (format {ds.attrs.get('window_format')!r})"
-            )
+        verify_checkpoint(ds, where, CSPH_WINDOW_CHECKPOINT)
         sim = ckpt.from_dataset(ds, where)
         geom = SPHWindowGeometry(**json.loads(ds.attrs["geometry"]))
         w = json.loads(ds.attrs["window"])
@@ -308,14 +310,12 @@ class SPHWindow:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> SPHWindow:
-        with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds.load()
-        return cls.from_dataset(ds, path)
+        """Load a window written by ``save`` (the 1D class hands a 2D file to ``SPHWindow2D``);
+        an unreadable, foreign or altered file raises ``CheckpointError`` naming it."""
+        return cls.from_dataset(read_checkpoint(path, verify=False), path)
 
 
 # == the 2D window (plane strain, periodic in y) ===========================================
-
-WINDOW_FORMAT_2D = "hugomap-sph-window2d/1"
 
 
 @dataclass
@@ -566,17 +566,14 @@ class SPHWindow2D(SPHWindow):
         })  # fmt: skip
         return ckpt.to_dataset(
             self.sim, extra=extra,
-            attrs={**(attrs or {}), "window_format": WINDOW_FORMAT_2D,
+            attrs={**(attrs or {}), "window_format": CSPH_WINDOW_2D_CHECKPOINT.format,
                    "geometry": json.dumps(asdict(self.geom)), "window": json.dumps(window)},
         )  # fmt: skip
 
     @classmethod
     def from_dataset(cls, ds: xr.Dataset, source: str | os.PathLike | None = None) -> SPHWindow2D:
-        where = str(source if source is not None else ds.encoding.get("source", "(in memory)"))
-        if ds.attrs.get("window_format") != WINDOW_FORMAT_2D:
-            raise CheckpointError(
-                where, f"not a 2D SPH window (format {ds.attrs.get('window_format')!r})"
-            )
+        where = checkpoint_source(ds, source)
+        verify_checkpoint(ds, where, CSPH_WINDOW_2D_CHECKPOINT)
         sim = ckpt.from_dataset(ds, where)
         geom = SPHWindowGeometry(**json.loads(ds.attrs["geometry"]))
         w = json.loads(ds.attrs["window"])

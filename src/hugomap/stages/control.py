@@ -7,7 +7,7 @@ import logging
 import os
 from pathlib import Path
 
-from ..failures import Failure
+from ..failures import HugomapFailure
 from ..registry import backend as backend_of
 from ..window.methods import amw, mw
 from ..window.steady import steady_state
@@ -31,7 +31,7 @@ def control_point(
                             "bad_config", f"scheme {scheme} is not a control scheme (amw, mw)")  # fmt: skip
     try:
         win, sig, pole, ds, profile = open_window(b, window0, scene)
-    except Failure as exc:
+    except HugomapFailure as exc:
         return window_point(out, b, scheme, scene, u_p, None, None, {}, clock.cost(),
                             exc.status, exc.diagnostic)  # fmt: skip
     clock.add(prior_cost(ds))
@@ -57,7 +57,7 @@ def control_point(
                      values["D_err"], values["u_p_set"], values["P"], status)  # fmt: skip
         else:
             status, diagnostic = res.status, res.diagnostic
-    except Failure as exc:
+    except HugomapFailure as exc:
         status, diagnostic = exc.status, exc.diagnostic
     cost = clock.cost(win.n_particles * (win.steps - step0))
     return window_point(out, b, scheme, scene, u_p, pole, win, values, cost, status, diagnostic,

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..failures import Failure
+from ..failures import HugomapFailure
 from ..io.atomic import write_json
 from ..registry import backend as backend_of
 from ..window import dichotomy as dich
@@ -59,7 +59,7 @@ def dichotomy_trial(
     u_out = float(json.loads(Path(state).read_text())["pending"][index])
     try:
         win, sig, _, ds, _ = open_window(b, window0, scene)
-    except Failure as exc:
+    except HugomapFailure as exc:
         r = {"u_out": u_out, "slope": float("nan"), "status": exc.status,
              "diagnostic": exc.diagnostic}  # fmt: skip
         return write_json({**r, **clock.cost()}, out)
@@ -68,7 +68,7 @@ def dichotomy_trial(
     step0 = win.steps
     try:
         r = fixed_run(win, sig, cp.trial_time, cp.every)
-    except Failure as exc:
+    except HugomapFailure as exc:
         r = {"u_out": u_out, "slope": float("nan"), "status": exc.status,
              "diagnostic": exc.diagnostic}  # fmt: skip
         log.error("%s: %s", exc.status, exc.diagnostic)
@@ -92,7 +92,7 @@ def dichotomy_point(
     clock = Clock(*[json.loads(Path(f).read_text()) for f in trials])
     try:
         win, sig, pole, ds, profile = open_window(b, window0, scene)
-    except Failure as exc:
+    except HugomapFailure as exc:
         return window_point(out, b, scheme, scene, u_p, None, None, {}, clock.cost(),
                             exc.status, exc.diagnostic)  # fmt: skip
     clock.add(prior_cost(ds))
@@ -119,7 +119,7 @@ def dichotomy_point(
         status, diagnostic = str(values.pop("status")), str(values.pop("diagnostic"))
         log.info("dichotomy: D = %.6g +- %.2g, P = %.6g, %s", values["D"], values["D_err"],
                  values["P"], status)  # fmt: skip
-    except Failure as exc:
+    except HugomapFailure as exc:
         status, diagnostic = exc.status, exc.diagnostic
     cost = clock.cost(win.n_particles * (win.steps - step0))
     return window_point(out, b, scheme, scene, u_p, pole, win, values, cost, status, diagnostic,

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from ..failures import Failure
+from ..failures import HugomapFailure
 from ..registry import backend as backend_of
 from ..states import Pole
 from ..window.piston import History
@@ -42,7 +42,7 @@ def load_to_target(
     step0 = sim.steps
     try:
         run_loading(sim, frame, profile, h)
-    except Failure as exc:
+    except HugomapFailure as exc:
         return failure(out, exc.status, exc.diagnostic, attrs)
     cost = clock.cost(sim.n_particles * (sim.steps - step0))
     log.info("loaded: t = %.4g, %d samples, front %.4g", sim.time, len(h.t), h.front[-1])

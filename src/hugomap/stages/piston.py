@@ -19,12 +19,21 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.shock import measure_point
-from ..failures import CheckpointError, Failure
+from ..failures import CheckpointError, HugomapFailure
 from ..registry import backend as backend_of
 from ..states import PistonFrame, Pole
 from ..window.piston import History, drive
-from .files import INFO_ATTR, Clock, history_of, history_vars, info_of, is_ok, open_dataset
-from .files import pole_vars, write_point
+from .files import (
+    INFO_ATTR,
+    Clock,
+    history_of,
+    history_vars,
+    info_of,
+    is_ok,
+    open_dataset,
+    pole_vars,
+    write_point,
+)
 
 log = logging.getLogger("hugomap")
 STALE_TMP_S = 60.0  # a temporary file not written to for this long was left by a killed write
@@ -145,7 +154,7 @@ def piston_point(
     status, diagnostic = "ok", ""
     try:
         drive(sim, frame, profile, h, on_sample=checkpoint)
-    except Failure as exc:
+    except HugomapFailure as exc:
         status, diagnostic = exc.status, exc.diagnostic
         log.error("%s: %s", status, diagnostic)
     values = {**base, **clock.cost(sim.n_particles * (sim.steps - step0))}

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import xarray as xr
 
-from ..io.atomic import write_netcdf
 from ..config import config_hash
+from ..io.atomic import write_netcdf
 from ..registry import backend as backend_of
 
 

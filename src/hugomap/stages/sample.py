@@ -7,7 +7,7 @@ import logging
 import os
 from pathlib import Path
 
-from ..failures import Failure
+from ..failures import HugomapFailure
 from ..registry import backend as backend_of
 from .files import INFO_ATTR, failure, pole_vars
 
@@ -22,7 +22,7 @@ def prepare_sample(scene: dict, out: str | os.PathLike) -> Path:
     attrs = {"stage": "sample", "scene_config": json.dumps(scene)}
     try:
         solver, pole, info = b.prepare(scene)
-    except (Failure, ValueError) as exc:  # e.g. a porous packing that cannot be reached
+    except (HugomapFailure, ValueError) as exc:  # e.g. a porous packing that cannot be reached
         return failure(out, "bad_config", str(exc), attrs)
     log.info("pole: %s", json.dumps(pole.as_dict()))
     return b.save(solver, out, pole_vars(pole, b),

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.stats import line_fit
-from ..failures import Failure
+from ..failures import HugomapFailure
 from ..registry import backend as backend_of
 from ..states import Pole
 from .files import INFO_ATTR, Clock, failure, history_of, info_of, is_ok, open_dataset
@@ -55,7 +55,7 @@ def window_start(
         if w["start_offset"]:
             # a deliberately wrong frame (stability maps): the front runs at ~start_offset D
             win.galilean_shift(w["start_offset"] * D_guess)
-    except Failure as exc:
+    except HugomapFailure as exc:
         return failure(out, exc.status, exc.diagnostic, attrs)
     cost = clock.cost(win.n_particles * max(win.steps - step0, 0))
     return b.save(win, out, None, {
