@@ -1,4 +1,4 @@
-"""How far a sweep has got: ``python -m hugomap status`` (issue 7, item 4).
+"""How far a sweep has got: ``python -m hugomap status``.
 
 Reads the results folder that the workflow writes (see ``workflow/rules``) and never the
 Snakemake state, so it works while a sweep runs, after it was killed, or on a copy:
@@ -38,7 +38,8 @@ from typing import Any, TextIO
 
 import xarray as xr
 
-from .config import load_config, point_tag
+from .config import load_config
+from .keys import point_tag
 
 DONE_STATES = ("ok", "not_converged")
 STATES = ("ok", "not_converged", "failed", "running", "pending")
@@ -48,8 +49,8 @@ SCHEMES = ("piston", "amw", "mw", "dichotomy")  # every scheme the workflow know
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")  # those that start from the window checkpoint
 
 
-# Every status a stage may end with other than ok/not_converged, and its cause (issue 5's
-# failure labels): a point file carries one of these with a diagnostic, never a value.
+# Every status a stage may end with other than ok/not_converged, and its cause (the failure
+# labels): a point file carries one of these with a diagnostic, never a value.
 FAILURES: dict[str, tuple[str, str]] = {
     "nan": ("unstable solver", "a position or velocity became NaN or infinite"),
     "cfl": ("unstable solver", "an atom moved too far in one step (time step too large)"),
