@@ -62,9 +62,7 @@ class Backend(Protocol):
     def start_piston(self, solver: ShockSolver, scene: dict, u_p: float) -> None:
         """Set a prepared sample in motion: the piston at ``u_p`` (in the backend's frame)."""
 
-    def piston_frame(
-        self, solver: ShockSolver, scene: dict, u_p: float, info: dict
-    ) -> PistonFrame:
+    def piston_frame(self, solver: ShockSolver, scene: dict, u_p: float, info: dict) -> PistonFrame:
         """How a piston run at ``u_p`` is measured (no change to the solver)."""
 
     def profile(self, solver: ShockSolver | WindowSolver, scene: dict, info: dict) -> Profile:
@@ -94,8 +92,9 @@ class Backend(Protocol):
     def cost(self, scene: dict, stage: str) -> Resources:
         """Resources of one job of ``stage`` (prepare, load, piston, reference, window)."""
 
-    def axis_labels(self) -> dict[str, tuple[str, float]]:
-        """Figure axis labels and scale factors: V, P, u_p_measured, D."""
+    def figure_labels(self, scene: dict) -> dict:
+        """Figure text: ``axes`` (label and scale factor of V, P, u_p_measured, D), ``tag``
+        (of the points), ``reference`` (the reference curve's name), ``title``."""
 
     def scale(self, scene: dict) -> dict[str, float]:
         """Dimensionless resolution of a scene's window: n_window (particles in it at the
@@ -103,5 +102,3 @@ class Backend(Protocol):
 
     def sound_speed(self, scene: dict) -> float | None:
         """The material model's sound speed c0 where it has one (None: fit the reference)."""
-
-

@@ -1,233 +1,41 @@
-"""The validation campaign (issue 5): variants of a few base scenes, their cost and error.
+"""The validation campaign's dataset: its scenes' cost and error, one row per point.
 
-A config's ``campaign`` block names *cases* (a base scene each) and, per case,
-
-- ``resolutions``: named sets of overrides (dotted keys, ``window.length: 30.0``) — each
-  becomes the scene ``<case>__<name>`` that runs the base's schemes at its piston velocities;
-- ``stability`` (optional): the map of where each scheme converges. Its strength axis is the
-  resolution variant it names (``resolution``): every scheme at every u_p of that scene.
-  Each further ``axes.<axis>`` sets one or more keys to a list of values (the first key's
-  value is the axis coordinate), each value becoming the scene ``<case>__<axis><i>`` that
-  runs the axis's ``schemes`` at ``stability.u_p`` (default: the base variant's).
-
-``expand_campaign`` turns the block into ordinary scenes before the config is validated, so
-the workflow runs them with its usual rules. ``campaign_dataset`` joins the scenes'
-aggregates (``results/hugoniot/<scene>.nc``) into one flat dataset (dim ``point``) of
-dimensionless figures, the cases having different units: the relative errors of D and P from
-the scene's reference Hugoniot at the point's u_p, u_p/c0, the CPU cost [s], the status and
-its failure class (``failures.FAILURES``); and the chart's markers (dim ``setting``: a case,
-scheme and resolution over the piston velocities all its resolutions ran) with the Pareto
-fronts of cost against each error.
+The campaign block's variants of a few base scenes are expanded into scenes before the
+config is validated (``hugomap.campaign_expand``, which this module re-exports for its
+callers). After the run, ``campaign_dataset`` joins the scenes' aggregates
+(``results/hugoniot/<scene>.nc``) into one flat dataset (dim ``point``) of dimensionless
+figures, the cases having different units: the relative errors of D and P from the scene's
+reference Hugoniot at the point's u_p, u_p/c0, the CPU cost [s], the status and its failure
+class (``failures.FAILURES``); and the chart's markers (dim ``setting``: a case, scheme and
+resolution over the piston velocities all its resolutions ran) with the Pareto fronts of
+cost against each error. ``write_campaign`` (the CLI's ``campaign`` command) writes it.
 """
 
 from __future__ import annotations
 
-import copy
 import json
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-SEP = "__"  # <case>__<variant>: reserved in scene names of a config with a campaign
-DEFAULT_NAME = "validation"
+from .campaign_expand import (  # noqa: F401 (re-exported: the campaign's public names)
+    DEFAULT_NAME,
+    SEP,
+    CampaignError,
+    Variant,
+    as_number,
+    campaign_name,
+    expand_campaign,
+    get_dotted,
+    variants,
+)
+from .registry import backend, scene_schema, solver_of
+
 USABLE = ("ok", "not_converged")
-
-
-@dataclass(frozen=True)
-class Variant:
-    """One scene of the campaign: which case, study and setting it is."""
-
-    scene: str  # the generated scene name
-    case: str
-    study: str  # "resolution" or "stability"
-    label: str  # the resolution's name, or the axis name and value index
-    axis: str = ""  # stability: the axis name ("" for the strength axis / resolutions)
-    keys: tuple[str, ...] = ()  # the dotted keys the axis sets
-    value: float = math.nan  # the axis coordinate: the first key's value
-    overrides: dict = field(default_factory=dict, compare=False, hash=False)
-
-
-class CampaignError(ValueError):
-    """A campaign block that cannot be expanded (the message names the key)."""
-
-
-def _set(scene: dict, dotted: str, value: Any, where: str) -> None:
-    """scene[a][b][c] = value for ``a.b.c`` (creating the blocks on the way)."""
-    parts = dotted.split(".")
-    if not all(parts):
-        raise CampaignError(f"{where}: key {dotted!r} is not a dotted key like window.length")
-    node = scene
-    for i, p in enumerate(parts[:-1]):
-        nxt = node.setdefault(p, {})
-        if not isinstance(nxt, dict):
-            block = ".".join(parts[: i + 1])
-            raise CampaignError(
-                f"{where}: key {dotted!r} cannot be set: the base scene's {block} is not a "
-                "block of keys"
-            )
-        node = nxt
-    node[parts[-1]] = copy.deepcopy(value)
-
-
-def _get(scene: Mapping, dotted: str) -> Any:
-    node: Any = scene
-    for p in dotted.split("."):
-        if not isinstance(node, Mapping) or p not in node:
-            return None
-        node = node[p]
-    return node
-
-
-def _number(x: Any) -> float:
-    if isinstance(x, bool):
-        return math.nan
-    if isinstance(x, int | float):
-        return float(x)
-    if isinstance(x, list | tuple) and x and all(isinstance(v, int | float) for v in x):
-        return float(np.prod(x))  # e.g. cells [80, 4, 4]: the count
-    return math.nan
-
-
-def variants(campaign: Mapping) -> list[Variant]:
-    """The campaign's scenes, in a fixed order (cases, resolutions, then stability axes).
-
-    Raises CampaignError on a block that the schema would accept but cannot be expanded
-    (an axis whose value lists differ in length, a stability resolution that is not defined).
-    """
-    out: list[Variant] = []
-    for case, spec in campaign["cases"].items():
-        where = f"campaign.cases.{case}"
-        for label, over in spec["resolutions"].items():
-            out.append(Variant(f"{case}{SEP}{label}", case, "resolution", label,
-                               overrides=dict(over)))  # fmt: skip
-        st = spec.get("stability")
-        if not st:
-            continue
-        base = st["resolution"]
-        if base not in spec["resolutions"]:
-            raise CampaignError(
-                f"{where}.stability.resolution = {base!r}: not one of the resolutions "
-                f"({', '.join(spec['resolutions'])})"
-            )
-        for axis, ax in st.get("axes", {}).items():
-            keys = tuple(ax["set"])
-            lengths = {len(v) for v in ax["set"].values()}
-            if len(lengths) != 1:
-                raise CampaignError(
-                    f"{where}.stability.axes.{axis}.set: the value lists of "
-                    f"{', '.join(keys)} differ in length ({sorted(lengths)}); give one value "
-                    "per key for each point of the axis"
-                )
-            for i in range(lengths.pop()):
-                over = dict(spec["resolutions"][base])
-                over.update({k: ax["set"][k][i] for k in keys})
-                over["schemes"] = list(ax["schemes"])
-                if "u_p" in st:
-                    over["shock.u_p"] = list(st["u_p"])
-                out.append(Variant(
-                    f"{case}{SEP}{axis}{i + 1}", case, "stability", f"{axis}{i + 1}", axis,
-                    keys, _number(ax["set"][keys[0]][i]), over,
-                ))  # fmt: skip
-    return out
-
-
-def expand_campaign(cfg: dict) -> list[Variant]:
-    """Add the campaign's scenes to ``cfg["scenes"]`` (in place); return them.
-
-    A block the schema will refuse anyway (not a mapping, missing keys) is left alone and
-    nothing is added, so the schema's message names the key. A user scene whose name
-    contains ``__`` and is not one of the campaign's is refused (the separator is the
-    campaign's), and a generated scene replaces only its own earlier expansion.
-    """
-    from .config import ConfigError
-
-    camp = cfg.get("campaign") if isinstance(cfg, dict) else None
-    if not _well_formed(camp):
-        return []
-    try:
-        vs = variants(camp)
-    except CampaignError as exc:
-        raise ConfigError(f"invalid config:\n  {exc}") from None
-    scenes = cfg.setdefault("scenes", {})
-    if not isinstance(scenes, dict):
-        return []
-    names = {v.scene for v in vs}
-    clash = sorted(str(n) for n in scenes if SEP in str(n) and n not in names)
-    if clash:
-        raise ConfigError(
-            "invalid config:\n  "
-            + "\n  ".join(f"scenes.{n}: '{SEP}' in a scene name is reserved for the "
-                          "campaign's variants (<case>__<variant>)" for n in clash)
-        )  # fmt: skip
-    for v in vs:
-        scene = copy.deepcopy(camp["cases"][v.case]["scene"])
-        try:
-            for k, val in v.overrides.items():
-                _set(scene, k, val, _origin(camp, v, k))
-        except CampaignError as exc:
-            raise ConfigError(f"invalid config:\n  {exc}") from None
-        scenes[v.scene] = scene
-    return vs
-
-
-def _origin(camp: Mapping, v: Variant, key: str) -> str:
-    """The campaign key path an override of variant ``v`` comes from (for messages)."""
-    case = f"campaign.cases.{v.case}"
-    if v.study == "resolution":
-        return f"{case}.resolutions.{v.label}"
-    st = camp["cases"][v.case]["stability"]
-    if key in v.keys:
-        return f"{case}.stability.axes.{v.axis}.set"
-    if key == "shock.u_p" and "u_p" in st:
-        return f"{case}.stability.u_p"
-    if key == "schemes":
-        return f"{case}.stability.axes.{v.axis}.schemes"
-    return f"{case}.resolutions.{st['resolution']}"
-
-
-def _well_formed(camp: Any) -> bool:
-    """Whether the block has the shape ``variants`` walks (the schema checks the rest)."""
-    if not isinstance(camp, dict) or not isinstance(camp.get("cases"), dict):
-        return False
-    for spec in camp["cases"].values():
-        if not isinstance(spec, dict) or not isinstance(spec.get("scene"), dict):
-            return False
-        res = spec.get("resolutions")
-        if not isinstance(res, dict) or not res:
-            return False
-        if not all(isinstance(o, dict) and all(isinstance(k, str) for k in o)
-                   for o in res.values()):  # fmt: skip
-            return False
-        st = spec.get("stability")
-        if st is None:
-            continue
-        if not isinstance(st, dict) or not isinstance(st.get("resolution"), str):
-            return False
-        if "u_p" in st and not isinstance(st["u_p"], list):
-            return False
-        axes = st.get("axes", {})
-        if not isinstance(axes, dict):
-            return False
-        for ax in axes.values():
-            if not (isinstance(ax, dict) and isinstance(ax.get("set"), dict) and ax["set"]
-                    and isinstance(ax.get("schemes"), list)
-                    and all(isinstance(k, str) and isinstance(v, list) and v
-                            for k, v in ax["set"].items())):  # fmt: skip
-                return False
-    return True
-
-
-def campaign_name(cfg: Mapping) -> str:
-    """The campaign's name (its files: ``results/campaign/<name>.nc``, ``…_*.png``)."""
-    return str(cfg.get("campaign", {}).get("name", DEFAULT_NAME))
-
-
-# -- the dataset ----------------------------------------------------------------------------
 
 
 def pareto_front(cost: np.ndarray, err: np.ndarray) -> np.ndarray:
@@ -252,7 +60,7 @@ def _base_on_axis(spec: Mapping, axis: str, base: Mapping) -> bool:
     base's (e.g. a ``window.start_offset`` set with beta); keys that vary with the first
     one (the averaging times set together) keep the base on the axis."""
     for key, values in list(spec["stability"]["axes"][axis]["set"].items())[1:]:
-        if len({json.dumps(v) for v in values}) == 1 and values[0] != _get(base, key):
+        if len({json.dumps(v) for v in values}) == 1 and values[0] != get_dotted(base, key):
             return False
     return True
 
@@ -302,11 +110,13 @@ def reference_at(u: float, ru: np.ndarray, ref: Mapping[str, np.ndarray]) -> dic
 
 
 def case_c0(ds: xr.Dataset, scene: Mapping) -> float:
-    """The sound speed that scales u_p: CSPH the EOS's c0 (the solid's, also for a porous
-    sample); MD the intercept of a straight-line fit D = c0 + s u_p to the reference
-    Hugoniot (``stats.linear_hugoniot_fit``), in the scene's own units."""
-    if scene.get("solver") == "csph":
-        return float(scene["material"]["eos"]["c0"])
+    """The sound speed that scales u_p: the material model's c0 where the backend has one
+    (CSPH: the EOS's, the solid's also for a porous sample), else the intercept of a
+    straight-line fit D = c0 + s u_p to the reference Hugoniot (MD:
+    ``stats.linear_hugoniot_fit``), in the scene's own units."""
+    c0 = backend(scene).sound_speed(scene)
+    if c0 is not None:
+        return float(c0)
     from .analysis.stats import linear_hugoniot_fit
 
     u, ref = _reference_curve(ds)
@@ -317,33 +127,26 @@ def case_c0(ds: xr.Dataset, scene: Mapping) -> float:
 
 def _knobs(scene: Mapping, c0: float) -> dict[str, float]:
     """Dimensionless resolution of a scene: particles in the window at the upstream density
-    (MD: rho0 A L; CSPH: L/dx in 1D, L W/dx^2 in 2D), window length in particle spacings
-    (MD: rho0^(-1/3); CSPH: dx), and the average time in sound crossings of the window
-    (average_time c0 / L; NaN where a CSPH default is resolved per point)."""
-    w, s = scene.get("window", {}), scene["sample"]
+    and window length in particle spacings (``Backend.scale``), and the average time in
+    sound crossings of the window (average_time c0 / L; NaN where average_time is null,
+    derived per point)."""
+    w = scene.get("window", {})
+    sc = backend(scene).scale(scene)
     L = float(w.get("length", math.nan))
-    if scene.get("solver") == "csph":
-        spacing = float(s["dx"])
-        across = float(s["width"]) / spacing if scene.get("dim") == 2 else 1.0
-    else:
-        a = (4.0 / float(s["rho0"])) ** (1.0 / 3.0)  # FCC lattice constant
-        spacing = float(s["rho0"]) ** (-1.0 / 3.0)
-        across = float(s["rho0"]) * s["cells"][1] * s["cells"][2] * a * a * spacing
-    avg = float(w.get("average_time", math.nan))
+    avg = w.get("average_time")  # null: derived per point (CSPH)
+    avg = math.nan if avg is None else float(avg)
     return {
-        "n_window": across * L / spacing,
-        "window_spacings": L / spacing,
+        "n_window": sc["n_window"],
+        "window_spacings": sc["window_spacings"],
         "average_crossings": avg * c0 / L,
     }
 
 
-def _axis_unit(solver: str, dotted: str) -> str:
+def _axis_unit(scene: Mapping, dotted: str) -> str:
     """The unit of a scene key, from the ``[...]`` of its schema description ('1' if none)."""
     import re
 
-    from .config import load_schema
-
-    node: Any = load_schema()["$defs"]["csph_scene" if solver == "csph" else "md_scene"]
+    node: Any = scene_schema(solver_of(scene))
     for p in dotted.split("."):
         node = node.get("properties", {}).get(p) if isinstance(node, dict) else None
         if node is None:
@@ -405,9 +208,8 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
             ds = ds.load()
         c0 = case_c0(ds, scene)
         ru, ref = _reference_curve(ds)
-        solver = scene.get("solver", "md")
         cases.setdefault(v.case, {
-            "c0": c0, "units": "SI (m, s, kg)" if solver == "csph" else "LJ reduced",
+            "c0": c0, "units": backend(scene).units.system,
             "velocity_unit": str(ds["u_p"].attrs.get("units", "")),
             "reference": _reference_name(ds),
         })  # fmt: skip
@@ -417,8 +219,8 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
         if v.axis:
             base = cfg["scenes"][f"{v.case}{SEP}{st['resolution']}"]
             axes.setdefault(v.case, {})[v.axis] = {
-                "keys": list(v.keys), "unit": _axis_unit(solver, v.keys[0]),
-                "base": _number(_get(base, v.keys[0])),
+                "keys": list(v.keys), "unit": _axis_unit(scene, v.keys[0]),
+                "base": as_number(get_dotted(base, v.keys[0])),
                 "base_row": int(_base_on_axis(cfg["campaign"]["cases"][v.case], v.axis, base)),
             }  # fmt: skip
         knobs = _knobs(scene, c0)

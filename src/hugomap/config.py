@@ -3,9 +3,13 @@
 A bad config is refused before any job starts: ``validate_config`` collects every problem and
 raises one ``ConfigError`` whose lines name the key (as a dotted path), the value and the
 allowed range. The schema (``workflow/schemas/config.schema.json``, draft 2020-12) holds the
-per-key ranges and defaults; the checks here are the ones that involve several keys (a bin
-wider than the box, a cutoff longer than half the transverse box, two piston velocities that
-would share one point folder).
+per-key ranges and the constant defaults; each solver's scene config (``md.scene_config``,
+``sph.scene_config``) resolves the defaults that follow from other keys (CSPH: multiples of
+dx) and holds the checks that involve several keys (a bin wider than the box, a cutoff longer
+than half the transverse box, two piston velocities that would share one point folder).
+Defaults are filled here and nowhere else: after ``validate_config`` every scene is complete,
+except the CSPH times that depend on the point's u_p, which stay null (derived per point; the
+schema says how).
 
 Whatever the input (YAML allows NaN, ±inf, non-string keys, dates, self-containing anchors),
 the only exception is ``ConfigError``: NaN and ±inf are not numbers here (they pass every
@@ -16,63 +20,34 @@ message is shortened to one line (``tests/unit/test_config_fuzz.py`` fuzzes this
 from __future__ import annotations
 
 import copy
-import hashlib
 import json
 import math
 import re
-from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 import jsonschema
 import yaml
 
+from . import campaign_expand, registry
+from .keys import MAX_INT_BITS, config_hash, key_path, point_tag
+from .keys import show as _show
+
+__all__ = [
+    "ConfigError",
+    "config_hash",
+    "key_path",
+    "load_config",
+    "load_schema",
+    "point_tag",
+    "validate_config",
+]
+
 SCHEMA_PATH = Path(__file__).resolve().parents[2] / "workflow" / "schemas" / "config.schema.json"
 
 
 class ConfigError(ValueError):
     """A config that cannot run; the message lists every problem, one per line."""
-
-
-_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-# Integers longer than this (about 308 digits) are out of every range. Beyond about 14,000
-# bits Python cannot even print them, which would crash jsonschema's own messages, so they
-# are refused before the schema runs.
-_MAX_INT_BITS = 1024
-
-
-def key_path(parts: Iterable[Any]) -> str:
-    """A config key path as text: ``scenes.lj_liquid.shock.u_p[0]``; keys that are not
-    identifiers are quoted (``scenes['a b']``); the empty path is ``(top level)``."""
-    out = ""
-    for p in parts:
-        if isinstance(p, int) and not isinstance(p, bool):
-            out += f"[{p}]"
-        elif isinstance(p, str) and _IDENT.fullmatch(p):
-            out += f".{p}" if out else p
-        else:
-            out += f"[{_show(p)}]"
-    return out or "(top level)"
-
-
-def point_tag(u: float) -> str:
-    """Folder tag of a piston velocity, ``up<tag>`` (6 significant digits: 2.0 -> '2')."""
-    return f"{float(u):.6g}"
-
-
-def _show(value: Any, limit: int = 60) -> str:
-    """``repr`` of a config value, shortened to ``limit`` characters for a one-line message."""
-    if (
-        isinstance(value, int)
-        and not isinstance(value, bool)
-        and value.bit_length() > _MAX_INT_BITS
-    ):
-        return f"<integer of about {int(value.bit_length() * math.log10(2)) + 1} digits>"
-    try:
-        text = repr(value)
-    except (ValueError, RecursionError):  # an unprintable number, a self-containing value
-        text = f"<{type(value).__name__}>"
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def _is_number(value: Any) -> bool:
@@ -125,13 +100,21 @@ def _message(err: jsonschema.ValidationError) -> str:
     if v == "required":
         return f"{where}: {err.message}"
     if v == "type":
-        if _is_number(err.instance) and s.get("type") in ("number", "integer"):
+        nonfinite = isinstance(err.instance, float) and not math.isfinite(err.instance)
+        types = s.get("type")
+        if isinstance(types, list) and "null" in types:  # a time derived per point when null
+            num = next((t for t in types if t != "null"), "number")
+            what = "not a finite number" if nonfinite else f"must be of type {num} or null"
+            return (
+                f"{where} = {shown}: {what}; allowed range {_range(s)}, or null (derived per point)"
+            )
+        if _is_number(err.instance) and types in ("number", "integer"):
             return (
                 f"{where} = {shown}: not a finite number; allowed range {_range(s)}"
-                if isinstance(err.instance, float) and not math.isfinite(err.instance)
-                else f"{where} = {shown}: must be of type {s['type']}; allowed range {_range(s)}"
+                if nonfinite
+                else f"{where} = {shown}: must be of type {types}; allowed range {_range(s)}"
             )
-        return f"{where} = {shown}: must be of type {s.get('type')}"
+        return f"{where} = {shown}: must be of type {types}"
     if v in ("minItems", "maxItems"):
         return f"{where} = {shown}: needs {'at least' if v == 'minItems' else 'at most'} {err.validator_value} item(s)"
     if v == "minProperties":
@@ -142,7 +125,7 @@ def _message(err: jsonschema.ValidationError) -> str:
 
 
 def _huge(value: Any) -> bool:
-    return _is_number(value) and isinstance(value, int) and value.bit_length() > _MAX_INT_BITS
+    return _is_number(value) and isinstance(value, int) and value.bit_length() > MAX_INT_BITS
 
 
 def _huge_integers(cfg: Any) -> list[str]:
@@ -187,266 +170,44 @@ _Validator = _with_defaults(jsonschema.Draft202012Validator)
 
 
 def load_schema(path: str | Path | None = None) -> dict:
-    """The config schema (from ``path`` or the repository's ``workflow/schemas``)."""
+    """The config schema (from ``path`` or the repository's ``workflow/schemas``) with the
+    scene schema of every registered solver (``registry.scene_schema``) as ``$defs``
+    ``<solver>_scene``: a scene whose ``solver`` is one of them is validated by its schema,
+    one without the key by the default solver's."""
     with open(path or SCHEMA_PATH) as fh:
-        return json.load(fh)
+        schema = json.load(fh)
+    defs = schema.setdefault("$defs", {})
+    branch: dict = {"$ref": f"#/$defs/{registry.DEFAULT_SOLVER}_scene"}
+    for name in reversed(list(registry.REGISTRY)):
+        defs[f"{name}_scene"] = registry.scene_schema(name)
+        if name == registry.DEFAULT_SOLVER:
+            continue
+        branch = {
+            "if": {"type": "object", "required": ["solver"],
+                   "properties": {"solver": {"const": name}}},
+            "then": {"$ref": f"#/$defs/{name}_scene"},
+            "else": branch,
+        }  # fmt: skip
+    schema["properties"]["scenes"]["additionalProperties"] = branch
+    return schema
 
 
-def lattice_constant(rho: float) -> float:
-    """FCC lattice constant a = (4/ρ)^(1/3) [σ] at number density ρ [σ⁻³]."""
-    return (4.0 / rho) ** (1.0 / 3.0)
+def _scene_config(solver: str):
+    """The scene config module of a solver: ``resolve_defaults(scene)``, ``check(base,
+    scene, cfg)``."""
+    return registry.scene_config(solver)
 
 
-def _cross_checks(cfg: dict) -> list[str]:
-    """Checks that involve several keys; each message names every key it depends on."""
+def _scene_checks(cfg: dict) -> list[str]:
+    """Resolve every scene's remaining defaults (the only place they are filled: a validated
+    scene is complete) and run its solver's cross-key checks; each message names every key
+    it depends on."""
     problems = []
     for name, sc in cfg.get("scenes", {}).items():
-        base = f"scenes.{name}"
-        if sc.get("solver") == "csph":
-            problems += _csph_checks(base, sc, cfg.get("schemes", ["piston"]))
-            continue
-        smp, pot, sh = sc["sample"], sc["potential"], sc["shock"]
-        a = lattice_constant(smp["rho0"])
-        L = [c * a for c in smp["cells"]]
-        rlist = pot["rc"] + pot["skin"]
-        half_t = 0.5 * min(L[1], L[2])
-        box = f"sample.cells = {smp['cells']} at sample.rho0 = {smp['rho0']}"
-        if rlist > half_t:
-            problems.append(
-                f"{base}.potential.rc = {pot['rc']}: rc + skin must not exceed half the "
-                f"transverse box; allowed range (1.0, {half_t - pot['skin']:.4g}] sigma "
-                f"with potential.skin = {pot['skin']} for {box}"
-            )
-        if sh["bin_width"] >= L[0] / 4:
-            problems.append(
-                f"{base}.shock.bin_width = {sh['bin_width']}: wider than the box allows; "
-                f"allowed range (0, {L[0] / 4:.4g}) sigma (a quarter of L_x = {L[0]:.4g} "
-                f"for {box})"
-            )
-        rest = L[0] * (1 - sh["load_fraction"])
-        if 2 * sh["gap"] + sh["rear_margin"] >= rest:
-            problems.append(
-                f"{base}.shock.gap = {sh['gap']}: 2·gap + shock.rear_margin "
-                f"(= {sh['rear_margin']}) must be shorter than the part of the sample left "
-                f"after loading, (1 - shock.load_fraction) L_x = {rest:.4g} sigma with "
-                f"shock.load_fraction = {sh['load_fraction']} for {box}"
-            )
-        out = sc["window"]["outflow"]
-        if out["tau_fast"] >= out["tau_slow"]:
-            problems.append(
-                f"{base}.window.outflow.tau_fast = {out['tau_fast']}: must be shorter than "
-                f"window.outflow.tau_slow = {out['tau_slow']}; allowed range (0, "
-                f"{out['tau_slow']:.4g}) tau"
-            )
-        seen: dict[str, int] = {}
-        for i, u in enumerate(sh["u_p"]):
-            tag = point_tag(u)
-            if tag in seen:
-                problems.append(
-                    f"{base}.shock.u_p[{i}] = {u}: same point folder up{tag} as "
-                    f"shock.u_p[{seen[tag]}] = {sh['u_p'][seen[tag]]}; piston velocities "
-                    f"must differ in their first 6 significant digits"
-                )
-            seen.setdefault(tag, i)
-        if sc["phase"] == "liquid" and "reference" in sc:
-            ref = sc["reference"]
-            rho_max = smp["rho0"] * max(ref["compressions"])
-            Lref = ref["cells"] * lattice_constant(rho_max)
-            if Lref < 2 * rlist:
-                problems.append(
-                    f"{base}.reference.cells = {ref['cells']}: the periodic reference box of a "
-                    f"phase = liquid scene at "
-                    f"the highest compression (reference.compressions max "
-                    f"{max(ref['compressions'])} x sample.rho0 = {smp['rho0']}) is "
-                    f"{Lref:.3g} sigma, shorter than 2 (potential.rc + potential.skin) = "
-                    f"{2 * rlist:.3g}; use more cells"
-                )
+        solver = _scene_config(registry.solver_of(sc))
+        solver.resolve_defaults(sc)
+        problems += solver.check(f"scenes.{name}", sc, cfg)
     return problems
-
-
-# -- CSPH scenes (SI units) ---------------------------------------------------------------
-
-#: Smallest pore radius in lattice spacings (``hugomap.sph.sample.K_RESOLUTION``).
-K_RESOLUTION = 3.0
-#: RSA jamming coverage of equal discs (Feder 1980; Hinrichsen, Feder & Jøssang 1986).
-RSA_JAMMING = 0.547
-#: Particles a CSPH sample must hold along x (front tracking, slabs, window).
-MIN_COLUMNS = 40
-#: Frozen inflow particles of the 1D window (``sph.window.SPHWindow.from_piston``).
-WINDOW_INFLOW = 8
-#: Schemes a CSPH scene runs, by dim (the windows: ``sph.window.SPHWindow``, ``SPHWindow2D``).
-CSPH_SCHEMES = {1: ("piston", "amw", "mw", "dichotomy"), 2: ("piston", "amw", "mw", "dichotomy")}
-
-
-def fill_csph_defaults(sc: dict) -> None:
-    """Fill the CSPH defaults that scale with the lattice spacing dx [m] (idempotent):
-    shock.bin_width = 2 dx, shock.gap = 10 dx, shock.avg_length = 20 dx, window.length =
-    150 dx, window.cut_every = 10 dx. Time defaults that depend on u_p (window_time,
-    average_time) are resolved per point by the window stages."""
-    dx = sc["sample"]["dx"]
-    for key, k in (("bin_width", 2.0), ("gap", 10.0), ("avg_length", 20.0)):
-        sc["shock"].setdefault(key, k * dx)
-    sc["window"].setdefault("length", 150.0 * dx)
-    sc["window"].setdefault("cut_every", 10.0 * dx)
-
-
-def _csph_checks(base: str, sc: dict, top_schemes: list) -> list[str]:
-    """Cross-key checks of a CSPH scene (SI units); each message names the keys involved."""
-    out: list[str] = []
-    smp, sh, w = sc["sample"], sc["shock"], sc["window"]
-    eos, st = sc["material"]["eos"], sc["material"]["strength"]
-    num = sc["numerics"]
-    dx, length, dim = smp["dx"], smp["length"], sc["dim"]
-    fill_csph_defaults(sc)
-    schemes = sc.get("schemes", top_schemes)
-    allowed = list(CSPH_SCHEMES[dim])
-    other = [s for s in schemes if s not in allowed]
-    if other:
-        where = f"{base}.schemes" if "schemes" in sc else "schemes"
-        own = "" if "schemes" in sc else "; give the scene its own schemes"
-        out.append(
-            f"{where} = {_show(schemes)}: {_show(other)} not available for a solver = csph "
-            f"scene with dim = {dim} ({base}); allowed: {_show(allowed)}{own}"
-        )
-    if st["model"] == "von_mises" and st["yield_stress"] >= st["shear_modulus"]:
-        out.append(
-            f"{base}.material.strength.yield_stress = {st['yield_stress']:.4g}: must be below "
-            f"material.strength.shear_modulus = {st['shear_modulus']:.4g} Pa; allowed range "
-            f"(0, {st['shear_modulus']:.4g}) Pa"
-        )
-    n_x = length / dx
-    if n_x < MIN_COLUMNS:
-        out.append(
-            f"{base}.sample.length = {length:.4g}: holds {n_x:.3g} particles of sample.dx = "
-            f"{dx:.4g} m; allowed range [{MIN_COLUMNS * dx:.4g}, 1.0] m ({MIN_COLUMNS} dx)"
-        )
-    if dim == 1 and ("width" in smp or "porous" in smp):
-        key = "width" if "width" in smp else "porous"
-        out.append(f"{base}.sample.{key}: only for dim = 2 (this scene has dim = 1)")
-    if dim == 2:
-        r_list = (4.0 * num["theta"] + 0.5) * dx  # neighbour-list radius, skin 0.5 l
-        if "width" not in smp:
-            out.append(f"{base}.sample: 'width' is a required property for dim = 2")
-        elif smp["width"] < 2.0 * r_list:
-            out.append(
-                f"{base}.sample.width = {smp['width']:.4g}: the periodic width must be at least "
-                f"twice the neighbour-list radius (4 numerics.theta + 0.5) sample.dx; allowed "
-                f"range [{2.0 * r_list:.4g}, 1.0] m"
-            )
-    por = smp.get("porous")
-    if dim == 2 and por is not None and "width" in smp:
-        alpha = por["distention"]
-        r = por.get("pore_radius")
-        if r is None:
-            out.append(f"{base}.sample.porous: 'pore_radius' is a required property")
-        else:
-            r_min, r_max = r
-            if r_min > r_max:
-                out.append(
-                    f"{base}.sample.porous.pore_radius = {_show(r)}: r_min must not exceed r_max"
-                )
-            if r_min < K_RESOLUTION * dx * (1 - 1e-12):
-                out.append(
-                    f"{base}.sample.porous.pore_radius = {_show(r)}: the smallest pore is "
-                    f"not resolved by sample.dx = {dx:.4g} m; allowed r_min >= "
-                    f"{K_RESOLUTION:g} dx = {K_RESOLUTION * dx:.4g} m (or a smaller dx)"
-                )
-            if 2.0 * r_max + dx > smp["width"]:
-                out.append(
-                    f"{base}.sample.porous.pore_radius = {_show(r)}: a pore of r_max must fit "
-                    f"across sample.width = {smp['width']:.4g} m; allowed r_max <= "
-                    f"{(smp['width'] - dx) / 2:.4g} m"
-                )
-            # RSA with a ligament g = dx jams at coverage 0.547 (r/(r + g/2))^2 (sample.py);
-            # the solid end layers (4 dx each) lower the reachable mean porosity further.
-            core = max(length - 8.0 * dx, 0.0) / length
-            phi_max = RSA_JAMMING * (r_max / (r_max + 0.5 * dx)) ** 2 * core
-            phi = 1.0 - 1.0 / alpha
-            if phi > phi_max:
-                out.append(
-                    f"{base}.sample.porous.distention = {alpha:g}: porosity {phi:.3f} cannot be "
-                    f"packed with pore_radius max {r_max:.4g} m at sample.dx = {dx:.4g} m "
-                    f"(random sequential addition jams near porosity {phi_max:.3f}); allowed "
-                    f"range [1, {1.0 / (1.0 - phi_max):.4g})"
-                )
-    if sh["end_fraction"] <= sh["load_fraction"]:
-        out.append(
-            f"{base}.shock.end_fraction = {sh['end_fraction']:g}: must exceed "
-            f"shock.load_fraction = {sh['load_fraction']:g}; allowed range "
-            f"({sh['load_fraction']:g}, 1)"
-        )
-    behind = sh["load_fraction"] * length
-    need = sh["avg_length"] + 2.0 * sh["gap"]
-    if need >= behind:
-        out.append(
-            f"{base}.shock.avg_length = {sh['avg_length']:.4g}: avg_length + 2 shock.gap "
-            f"(= {need:.4g} m) must be shorter than the length the front has crossed at the "
-            f"end of loading, shock.load_fraction x sample.length = {behind:.4g} m"
-        )
-    if sh["bin_width"] > 0.25 * sh["avg_length"]:
-        out.append(
-            f"{base}.shock.bin_width = {sh['bin_width']:.4g}: at most a quarter of "
-            f"shock.avg_length = {sh['avg_length']:.4g} m"
-        )
-    windowed = [s for s in schemes if s != "piston"]
-    if "tile_length" in w and dim != 2:
-        out.append(f"{base}.window.tile_length: only for dim = 2 (this scene has dim = {dim})")
-    if "dichotomy" in windowed:
-        d = w["dichotomy"]
-        if d["tolerance"] >= 2.0 * d["half_width"]:
-            out.append(
-                f"{base}.window.dichotomy.tolerance = {d['tolerance']:g}: must be below the "
-                f"initial bracket width 2 window.dichotomy.half_width = "
-                f"{2.0 * d['half_width']:g} m/s; allowed range (0, {2.0 * d['half_width']:g}) m/s"
-            )
-    if windowed:
-        Lw, ff = w["length"], w["front_fraction"]
-        u_max = max(sh["u_p"])
-        D = eos["c0"] + eos["s"] * u_max
-        if dim == 2 and por is not None and por["distention"] > 1.0:
-            # porous: the snowplow speed u α/(α − 1) (full compaction to the solid density; a
-            # compaction left incomplete runs faster, so the room is not overestimated)
-            a = por["distention"]
-            D = min(D, u_max * a / (a - 1.0))
-        room_behind = behind * (1.0 - u_max / D)
-        room_ahead = (1.0 - sh["load_fraction"]) * length - WINDOW_INFLOW * dx
-        if ff * Lw > room_behind or (1.0 - ff) * Lw > room_ahead:
-            out.append(
-                f"{base}.window.length = {Lw:.4g}: a window with window.front_fraction = {ff:g} "
-                f"does not fit around the front at the end of loading (room {room_behind:.4g} m "
-                f"behind it at u_p = {u_max:g} m/s, {room_ahead:.4g} m ahead); shorten it or "
-                "lengthen sample.length"
-            )
-        gap_out = w.get("outflow_gap", sh["gap"])
-        slab = sh["gap"] + gap_out + sh["avg_length"]
-        parts = "shock.gap + window.outflow_gap + " if "outflow_gap" in w else "2 shock.gap + "
-        parts += "shock.avg_length"
-        if ff * Lw < slab * (1 - 1e-12):
-            out.append(
-                f"{base}.window.front_fraction = {ff:g}: the front starts {ff * Lw:.4g} m from "
-                f"the outflow edge of window.length = {Lw:.4g} m, less than the averaged slab "
-                f"behind it needs, {parts} = {slab:.4g} m; allowed range "
-                f"[{slab / Lw:.4g}, 0.8] (or a longer window)"
-            )
-        if dim == 2:
-            lt = w.get("tile_length") or (1.0 - ff) * Lw
-            key = (
-                "window.tile_length"
-                if "tile_length" in w
-                else ("window.tile_length (default (1 - window.front_fraction) window.length)")
-            )
-            need = (WINDOW_INFLOW + 1) * dx
-            if por is not None and por.get("pore_radius"):
-                # a pore must clear its own image along x, as along y
-                need = max(need, 2.0 * por["pore_radius"][1] + dx)
-            if lt < need * (1 - 1e-12):
-                out.append(
-                    f"{base}.{key} = {lt:.4g}: the periodic inflow tile must hold the frozen "
-                    f"inflow layer ({WINDOW_INFLOW + 1} dx) and, if porous, a pore of r_max "
-                    f"with a ligament to its own image (2 r_max + sample.dx); allowed range "
-                    f"[{need:.4g}, 1.0] m"
-                )
-    return out
 
 
 def _tree_copy(node: Any, ancestors: tuple[int, ...] = ()) -> Any:
@@ -485,10 +246,11 @@ def validate_config(cfg: Any, schema: dict | None = None) -> dict:
     if isinstance(cfg, dict):
         _unshare(cfg)
         if not problems:
-            from .campaign import expand_campaign
-
             try:
-                generated = expand_campaign(cfg)  # the campaign's variants become scenes
+                # the campaign's variants become scenes
+                generated = campaign_expand.expand_campaign(cfg)
+            except campaign_expand.CampaignError as exc:
+                raise ConfigError(f"invalid config:\n  {exc}") from None
             except RecursionError:
                 raise ConfigError(
                     "invalid config:\n  campaign: nested too deeply (a recursive YAML anchor?)"
@@ -506,7 +268,7 @@ def validate_config(cfg: Any, schema: dict | None = None) -> dict:
             ) from None
         problems = [_message(e) for e in errors]
     if not problems:
-        problems = _cross_checks(cfg)
+        problems = _scene_checks(cfg)
     if problems:
         for v in generated:  # say where a generated scene's problem comes from
             problems = [
@@ -538,35 +300,3 @@ def load_config(path: str | Path) -> dict:
         reason = " ".join(str(exc).split())[:200] or type(exc).__name__
         raise ConfigError(f"invalid config: {path}: not valid YAML: {reason}") from None
     return validate_config({} if cfg is None else cfg)
-
-
-def config_hash(obj: Any) -> str:
-    """SHA-256 (first 16 hex digits) of the canonical JSON of ``obj``."""
-    return hashlib.sha256(json.dumps(obj, sort_keys=True).encode()).hexdigest()[:16]
-
-
-def reference_inputs(scene: dict) -> dict | None:
-    """What an MD scene's equilibrium reference Hugoniot depends on (``pipeline.reference_stage``
-    reads nothing else): the potential block, the pole (``sample.rho0`` [σ⁻³], ``sample.T0``
-    [ε/k_B]), the sample's seed and the ``reference`` block. Scenes that agree on these share
-    one computation, ``results/references/<reference_key>.nc``, so a campaign's variants of
-    one scene (or a changed window setting) do not recompute it. None for a CSPH scene: its
-    reference is the material model's own Hugoniot, computed per scene in milliseconds."""
-    if scene.get("solver") == "csph":
-        return None
-    s = scene["sample"]
-    return {
-        "solver": "md",
-        "potential": dict(scene.get("potential", {})),
-        "sample": {"rho0": s["rho0"], "T0": s["T0"], "seed": s["seed"]},
-        "reference": dict(scene["reference"]),
-    }
-
-
-def reference_key(scene: dict) -> str | None:
-    """The shared reference's file stem: ``lj_`` and the first 12 hex digits of
-    ``config_hash(reference_inputs(scene))``; None for a CSPH scene."""
-    inputs = reference_inputs(scene)
-    if inputs is None:
-        return None
-    return "lj_" + config_hash(inputs)[:12]

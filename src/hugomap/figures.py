@@ -13,38 +13,16 @@ import xarray as xr  # noqa: E402
 from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter  # noqa: E402
 
 
-def _cutoff(ds: xr.Dataset, scene: str) -> str:
-    """The scene's LJ cutoff from the resolved config stored in the aggregate."""
+def _labels(ds: xr.Dataset, scene: str) -> dict:
+    """The scene backend's figure text (``Backend.figure_labels``), from the resolved
+    config in the aggregate."""
     import json
 
-    try:
-        cfg = json.loads(ds.attrs.get("config_json", "{}"))
-        return f"{cfg['scenes'][scene]['potential']['rc']:g}"
-    except (KeyError, TypeError, ValueError):
-        return "?"
+    from .registry import backend
 
-
-def _solver(ds: xr.Dataset, scene: str) -> str:
-    """The scene's solver (``md`` or ``csph``) from the resolved config in the aggregate."""
-    import json
-
-    try:
-        return str(json.loads(ds.attrs.get("config_json", "{}"))["scenes"][scene]["solver"])
-    except (KeyError, TypeError, ValueError):
-        return "md"
-
-
-# Axis labels and scale factors per solver: MD in LJ reduced units; CSPH in SI, drawn as
-# V [cm³/g] (×1e3 of m³/kg), P [GPa] (×1e-9 of Pa), velocities [m/s].
-_AXES = {
-    "md": {"V": ("specific volume V [σ³]", 1.0), "P": ("longitudinal stress P_xx [ε σ⁻³]", 1.0),
-           "u_p_measured": ("particle velocity u_p [σ/τ]", 1.0),
-           "D": ("shock velocity D [σ/τ]", 1.0)},
-    "csph": {"V": ("specific volume V [cm³/g]", 1e3),
-             "P": ("longitudinal stress P = −σ_xx [GPa]", 1e-9),
-             "u_p_measured": ("particle velocity u_p [m/s]", 1.0),
-             "D": ("shock velocity D [m/s]", 1.0)},
-}  # fmt: skip
+    cfg = json.loads(ds.attrs.get("config_json", "{}"))
+    sc = cfg.get("scenes", {}).get(scene, {})
+    return backend(sc).figure_labels(sc)
 
 
 def hugoniot_figures(
@@ -54,8 +32,8 @@ def hugoniot_figures(
     with xr.open_dataset(agg, engine="netcdf4") as ds:
         ds = ds.load()
     scene = ds.attrs.get("scene", "")
-    solver = _solver(ds, scene)
-    axes = _AXES.get(solver, _AXES["md"])
+    text = _labels(ds, scene)
+    axes = text["axes"]
     for out, (xv, yv) in ((out_pv, ("V", "P")), (out_dup, ("u_p_measured", "D"))):
         (xl, fx), (yl, fy) = axes[xv], axes[yv]
         fig, ax = plt.subplots(figsize=(5.5, 4.2), dpi=120)
@@ -71,7 +49,7 @@ def hugoniot_figures(
                 x = np.where(np.isfinite(u_set), u_set, d["u_p"].values)
                 xe = np.zeros_like(x)
             x, xe, y, ye = x * fx, xe * fx, y * fy, ye * fy
-            tag = "CSPH" if solver == "csph" else "MD"
+            tag = text["tag"]
             ax.errorbar(x[ok], y[ok], xerr=xe[ok], yerr=ye[ok], fmt="o", label=f"{sch} ({tag})")
             if (~ok).any():
                 ax.plot(x[~ok], y[~ok], "o", mfc="none", mec="gray", label=f"{sch}, not converged")
@@ -84,7 +62,7 @@ def hugoniot_figures(
                 ds[ry].values[order] * fy,
                 "k-",
                 lw=1.2,
-                label="reference (equilibrium MD)" if solver == "md" else "model Hugoniot",
+                label=text["reference"],
             )
             sx = {"V": "ref_snowplow_V", "u_p_measured": "ref_u_p"}[xv]
             sy = {"P": "ref_snowplow_P", "D": "ref_snowplow_D"}[yv]
@@ -95,10 +73,7 @@ def hugoniot_figures(
             ax.plot([fx / float(ds["rho0"])], [fy * float(ds["P0"])], "k*", ms=9, label="pole")
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
-        if solver == "csph":
-            ax.set_title(f"{scene}: CSPH")
-        else:
-            ax.set_title(f"{scene}: LJ rc = {_cutoff(ds, scene)} σ")
+        ax.set_title(f"{scene}: {text['title']}")
         ax.legend(fontsize=8)
         fig.tight_layout()
         fig.savefig(out)

@@ -1,22 +1,28 @@
 """The solver registry: the only code that reads a scene's ``solver`` key.
 
-Each entry names a backend class by module path, so that importing the registry (the
-workflow does so when it parses its rules) loads no solver, kernel or numba code; a backend
-is imported and made the first time it is asked for. A new backend is a folder of its own
-and one line here.
+Each entry names a backend's package. The package holds, by convention:
+- ``backend.py`` with ``BACKEND``, the ``hugomap.backend.Backend`` instance (imported the first
+  time it is asked for: importing the registry loads no solver, kernel or numba code);
+- ``scene.schema.json``, the JSON Schema of its scenes (``hugomap.config.load_schema`` joins
+  them into the config schema);
+- ``scene_config.py`` with ``resolve_defaults(scene)`` and ``check(base, scene, cfg)``, the
+  cross-key checks run at validation (light: no numba, no xarray).
+A new backend is a folder of its own and one line here.
 """
 
 from __future__ import annotations
 
 import functools
 import importlib
+import json
 from collections.abc import Mapping
+from importlib import resources
 from typing import Any
 
 REGISTRY: dict[str, str] = {
-    "md": "hugomap.md.backend:MDBackend",
-    "csph": "hugomap.sph.backend:CSPHBackend",
-    "synthetic": "hugomap.synthetic.backend:SyntheticBackend",
+    "md": "hugomap.md",
+    "csph": "hugomap.sph",
+    "synthetic": "hugomap.synthetic",
 }
 DEFAULT_SOLVER = "md"
 
@@ -32,8 +38,17 @@ def solver_of(scene: Mapping[str, Any]) -> str:
 @functools.cache
 def backend_named(name: str):
     """The backend registered as ``name`` (one instance per process)."""
-    module, _, cls = REGISTRY[name].partition(":")
-    return getattr(importlib.import_module(module), cls)()
+    return importlib.import_module(REGISTRY[name] + ".backend").BACKEND
+
+
+def scene_config(name: str):
+    """The scene-config module of the solver ``name`` (``resolve_defaults``, ``check``)."""
+    return importlib.import_module(REGISTRY[name] + ".scene_config")
+
+
+def scene_schema(name: str) -> dict:
+    """The JSON Schema of the solver's scenes (its package's ``scene.schema.json``)."""
+    return json.loads(resources.files(REGISTRY[name]).joinpath("scene.schema.json").read_text())
 
 
 def backend(scene: Mapping[str, Any]):

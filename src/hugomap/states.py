@@ -136,5 +136,3 @@ class Profile(Protocol):
         """Neutral state of ``n_bins`` bins whose sums were added into ``summed``: rho, u,
         P (= P_xx), Pyy, Pzz, E (specific internal energy), T (NaN where the backend has no
         temperature), and backend extras (CSPH: P_eos, eps_p)."""
-
-

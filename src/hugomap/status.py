@@ -1,4 +1,4 @@
-"""How far a sweep has got: ``python -m hugomap status`` (issue 7, item 4).
+"""How far a sweep has got: ``python -m hugomap status``.
 
 Reads the results folder that the workflow writes (see ``workflow/rules``) and never the
 Snakemake state, so it works while a sweep runs, after it was killed, or on a copy:
@@ -38,7 +38,8 @@ from typing import Any, TextIO
 
 import xarray as xr
 
-from .config import load_config, point_tag
+from .config import load_config
+from .keys import point_tag
 
 DONE_STATES = ("ok", "not_converged")
 STATES = ("ok", "not_converged", "failed", "running", "pending")

@@ -1,4 +1,5 @@
-"""The validation campaign's expansion, dataset, Pareto fronts and figures (hugomap.campaign).
+"""The validation campaign's expansion (hugomap.campaign_expand), dataset, Pareto fronts and
+figures (hugomap.campaign).
 
 References: the expansion is checked against the overrides written in the test; the
 dataset's errors against the reference line the synthetic aggregates are built from (a point

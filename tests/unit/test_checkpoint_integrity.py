@@ -21,10 +21,6 @@ import xarray as xr
 import yaml
 
 from hugomap import stages
-from hugomap.registry import backend_named
-from hugomap.stages import piston as piston_stage
-from hugomap.stages.files import history_of
-from hugomap.states import Pole
 from hugomap.config import validate_config
 from hugomap.failures import CheckpointError
 from hugomap.io.checkpoint import (
@@ -37,6 +33,10 @@ from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation
 from hugomap.md.window import MDWindow, WindowGeometry
+from hugomap.registry import backend_named
+from hugomap.stages import piston as piston_stage
+from hugomap.stages.files import history_of
+from hugomap.states import Pole
 
 from ._reference import one_numba_thread
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from hugomap.config import ConfigError, load_config, validate_config
+from hugomap.config import ConfigError, load_config, load_schema, validate_config
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -229,3 +229,84 @@ def test_md_scene_without_solver_is_still_md() -> None:
     with pytest.raises(ConfigError) as ei:
         validate_config(cfg)
     assert "scenes.tiny: 'solver' is a required property" in str(ei.value)
+
+
+def test_validation_resolves_every_default() -> None:
+    """Validation is the only place defaults are filled: a validated CSPH scene has its dx
+    defaults, and the times derived per point are null; resolving again changes nothing."""
+    from hugomap.sph.scene_config import resolve_defaults
+
+    cfg = load_config(ROOT / "config/copper.yaml")
+    solid = cfg["scenes"]["cu_solid"]
+    dx = solid["sample"]["dx"]
+    assert solid["shock"]["gap"] == pytest.approx(3e-4)  # set
+    assert solid["window"]["cut_every"] == pytest.approx(10 * dx)
+    porous = cfg["scenes"]["cu_porous"]
+    assert porous["window"]["dichotomy"]["trial_time"] is None  # derived per point
+    assert porous["window"]["dichotomy"]["final_time"] is None
+    tiny_cu = load_config(ROOT / "tests/workflow/tiny_cu/config.yaml")["scenes"]["tiny_cu"]
+    w = tiny_cu["window"]
+    assert w["window_time"] is None and w["average_time"] is None
+    before = copy.deepcopy(cfg)
+    for scene in cfg["scenes"].values():
+        resolve_defaults(scene)
+    assert cfg == before
+    assert validate_config(copy.deepcopy(before)) == before
+
+
+def test_null_times_are_allowed_and_named() -> None:
+    cfg = load_config(ROOT / "config/copper.yaml")
+    cfg["scenes"]["cu_solid"]["window"]["average_time"] = None
+    validate_config(cfg)
+    cfg["scenes"]["cu_solid"]["window"]["average_time"] = "long"
+    with pytest.raises(ConfigError) as ei:
+        validate_config(cfg)
+    assert (
+        "scenes.cu_solid.window.average_time = 'long': must be of type number or null; "
+        "allowed range (0.0, 1.0], or null (derived per point)" in str(ei.value)
+    )
+
+
+def test_lj_params_ranges_are_the_schema_ranges() -> None:
+    """One range per key: LJParams refuses exactly what the schema refuses."""
+    from hugomap.md.potential import LJParams
+
+    schema = load_schema()["$defs"]["md_scene"]["properties"]["potential"]["properties"]
+    rc, skin = schema["rc"], schema["skin"]
+    LJParams(rc=rc["maximum"], skin=skin["maximum"])
+    for bad in ({"rc": rc["exclusiveMinimum"]}, {"rc": rc["maximum"] * 1.001},
+                {"skin": skin["exclusiveMinimum"]}, {"skin": skin["maximum"] * 1.001}):  # fmt: skip
+        with pytest.raises(ValueError, match=f"potential.{next(iter(bad))} = .*: allowed range"):
+            LJParams(**bad)
+    with pytest.raises(ValueError, match=r"potential.rc = 7.0: allowed range \(1.0, 6.0\] sigma"):
+        LJParams(rc=7.0)
+
+
+def test_ghost_width_at_least_rc_with_window_schemes() -> None:
+    cfg = tiny()
+    cfg["scenes"]["tiny"]["potential"].update(rc=3.5, skin=0.2)
+    cfg["scenes"]["tiny"]["sample"]["cells"] = [36, 6, 6]
+    with pytest.raises(ConfigError) as ei:
+        validate_config(copy.deepcopy(cfg))
+    assert (
+        "scenes.tiny.window.ghost_width = 3.0: the frozen outflow layer must be at least the "
+        "cutoff potential.rc = 3.5 thick; allowed range [3.5, 20.0] sigma"
+    ) in str(ei.value)
+    cfg["schemes"] = ["piston"]  # no window: no frozen layer
+    validate_config(copy.deepcopy(cfg))
+    cfg["schemes"] = ["piston", "mw"]
+    cfg["scenes"]["tiny"]["window"]["ghost_width"] = 3.5
+    validate_config(cfg)
+
+
+def test_mw_position_gain_is_per_window_time_for_both_solvers() -> None:
+    """One meaning: dimensionless, per window_time. The MD default 0.1 at the default
+    window_time (2 tau) is the former 0.05 per tau."""
+    schema = load_schema()["$defs"]
+    md_w = schema["md_scene"]["properties"]["window"]["properties"]
+    cs_w = schema["csph_scene"]["properties"]["window"]["properties"]
+    for w in (md_w, cs_w):
+        assert "per window_time" in w["mw"]["properties"]["gain_position"]["description"]
+    assert md_w["mw"]["properties"]["gain_position"]["default"] / md_w["window_time"][
+        "default"
+    ] == pytest.approx(0.05)

@@ -1,4 +1,4 @@
-"""Property-based fuzzing of config validation (issue 7, item 5).
+"""Property-based fuzzing of config validation.
 
 Random configs are thrown at ``validate_config``, ``load_config`` and ``check-config``: every
 one must be accepted, or refused with a ``ConfigError`` whose every line names a key path of
@@ -569,3 +569,17 @@ def test_check_config_command(tmp_path: Path, text: str | None, expect: list[str
     assert all(line.startswith("  ") for line in lines[1:]), r.stderr
     for e in expect:
         assert e in r.stderr
+
+
+def test_campaign_names_that_are_not_printable() -> None:
+    """A resolution name with a record separator (str.splitlines splits at it) broke the
+    one-line message of a stability resolution that is not defined (found by fuzzing)."""
+    cfg = copy.deepcopy(CAMPAIGN)
+    res = cfg["campaign"]["cases"]["cu_solid"]["resolutions"]
+    res["\x1e"] = res.pop("mid")
+    with pytest.raises(ConfigError) as ei:
+        validate_config(cfg)
+    assert str(ei.value).splitlines()[1:] == [
+        "  campaign.cases.cu_solid.stability.resolution = 'mid': not one of the resolutions "
+        "(coarse, fine, '\\x1e')"
+    ]

@@ -11,6 +11,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+
 from hugomap.stages.piston import log_progress as _log_progress
 
 
@@ -43,7 +44,13 @@ def test_progress_line_gives_fraction_and_eta(caplog):
 def test_no_line_without_a_front(caplog):
     h = SimpleNamespace(front=[np.nan])
     with caplog.at_level(logging.INFO, logger="hugomap"):
-        _log_progress(_Sim(1, 0.1, (0.0, 50.0)), h, SimpleNamespace(rear_margin=5.0, far_end=None), [None], 1.0)
+        _log_progress(
+            _Sim(1, 0.1, (0.0, 50.0)),
+            h,
+            SimpleNamespace(rear_margin=5.0, far_end=None),
+            [None],
+            1.0,
+        )
     assert not [r for r in caplog.records if "progress" in r.getMessage()]
 
 

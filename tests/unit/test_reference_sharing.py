@@ -1,5 +1,5 @@
 """The MD reference Hugoniot is computed once per distinct set of its inputs (potential, pole,
-seed, reference block: ``config.reference_inputs``) and copied into each scene's folder."""
+seed, reference block: ``Backend.reference_inputs``) and copied into each scene's folder."""
 
 from __future__ import annotations
 
@@ -14,9 +14,16 @@ import pytest
 import xarray as xr
 import yaml
 
-from hugomap.config import reference_inputs, reference_key, validate_config
+from hugomap.config import validate_config
 from hugomap.io.atomic import write_netcdf
+from hugomap.registry import backend
 from hugomap.stages import reference_stage
+from hugomap.stages.reference import reference_key
+
+
+def reference_inputs(scene):
+    return backend(scene).reference_inputs(scene)
+
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -33,7 +40,7 @@ def _resolved(scene: dict) -> dict:
 def test_key_depends_only_on_what_the_reference_reads() -> None:
     base = _resolved(_tiny_scene())
     key = reference_key(base)
-    assert re.fullmatch(r"lj_[0-9a-f]{12}", key)
+    assert re.fullmatch(r"md_[0-9a-f]{12}", key)
     same = copy.deepcopy(base)
     same["window"]["length"] = 30.0  # the reference reads no window, shock or cells setting
     same["shock"]["u_p"] = [0.5]

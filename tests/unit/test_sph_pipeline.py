@@ -16,8 +16,13 @@ import pytest
 import xarray as xr
 
 from hugomap.analysis.porous import COPPER, porous_hugoniot_from_up, snowplow_hugoniot
-from hugomap.analysis.shock import bin_edges, jump_residual_errors, jump_residuals, slab_state
-from hugomap.analysis.shock import track_front
+from hugomap.analysis.shock import (
+    bin_edges,
+    jump_residual_errors,
+    jump_residuals,
+    slab_state,
+    track_front,
+)
 from hugomap.io.dataset import POINT_VARS
 from hugomap.md.backend import MDBackend
 from hugomap.sph.backend import CSPHBackend, SPHProfile

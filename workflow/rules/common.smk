@@ -33,7 +33,7 @@ def all_targets():
     out = []
     made = set()  # the campaign's scenes: their history figures only on request
     if "campaign" in config:
-        from hugomap.campaign import variants
+        from hugomap.campaign_expand import variants
 
         made = {v.scene for v in variants(config["campaign"])}
     for scene in config["scenes"]:
@@ -190,7 +190,7 @@ def dichotomy_final(w):
 
 def campaign_aggregates(wildcards):
     """The aggregates of every scene the campaign made."""
-    from hugomap.campaign import variants
+    from hugomap.campaign_expand import variants
 
     if "campaign" not in config:
         raise WorkflowError(

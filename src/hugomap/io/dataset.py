@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from .. import __version__
-from ..config import config_hash
+from ..keys import config_hash
 
 P_UNIT = "epsilon sigma^-3"
 POINT_VARS: dict[str, tuple[str, str]] = {

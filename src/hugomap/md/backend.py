@@ -288,11 +288,16 @@ class MDBackend:
         return Resources(mem, n * sh["max_time"] / sh["dt"] * S_PER_ATOM_STEP)
 
     # -- presentation ----------------------------------------------------------------------
-    def axis_labels(self) -> dict[str, tuple[str, float]]:
-        return {"V": ("specific volume V [σ³]", 1.0),
+    def figure_labels(self, scene: dict) -> dict:
+        """Axis labels and scale factors (reduced units), the points' tag, the reference's
+        name and the title (the potential's cutoff: the Hugoniot depends on it)."""
+        axes = {"V": ("specific volume V [σ³]", 1.0),
                 "P": ("longitudinal stress P_xx [ε σ⁻³]", 1.0),
                 "u_p_measured": ("particle velocity u_p [σ/τ]", 1.0),
                 "D": ("shock velocity D [σ/τ]", 1.0)}  # fmt: skip
+        rc = scene.get("potential", {}).get("rc", "?")
+        return {"axes": axes, "tag": "MD", "reference": "reference (equilibrium MD)",
+                "title": f"LJ rc = {rc:g} σ" if isinstance(rc, int | float) else "LJ"}  # fmt: skip
 
     def sound_speed(self, scene: dict) -> float | None:
         """No model sound speed: the campaign fits one to the reference Hugoniot."""
@@ -307,3 +312,6 @@ class MDBackend:
         across = float(s["rho0"]) * s["cells"][1] * s["cells"][2] * a * a * spacing
         return {"n_window": across * L / spacing, "window_spacings": L / spacing,
                 "spacing": spacing}  # fmt: skip
+
+
+BACKEND = MDBackend()

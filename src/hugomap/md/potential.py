@@ -11,6 +11,7 @@ The potential (rc and the shift) defines the Hugoniot: every dataset records bot
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 from ..numba_conf import njit
@@ -25,10 +26,18 @@ class LJParams:
     skin: float = 0.3
 
     def __post_init__(self) -> None:
-        if not (0.5 < self.rc <= 10.0):
-            raise ValueError(f"potential.rc = {self.rc}: allowed range (0.5, 10] sigma")
-        if not (0.0 < self.skin <= 2.0):
-            raise ValueError(f"md.skin = {self.skin}: allowed range (0, 2] sigma")
+        # The ranges are the config schema's (potential.rc, potential.skin): one statement.
+        for key in ("rc", "skin"):
+            value = getattr(self, key)
+            lo, lo_open, hi, hi_open = _schema_range(key)
+            inside = (lo < value if lo_open else lo <= value) and (
+                value < hi if hi_open else value <= hi
+            )
+            if not inside:
+                lb, rb = "(" if lo_open else "[", ")" if hi_open else "]"
+                raise ValueError(
+                    f"potential.{key} = {value}: allowed range {lb}{lo}, {hi}{rb} sigma"
+                )
 
     @property
     def ushift(self) -> float:
@@ -39,6 +48,19 @@ class LJParams:
     def rlist(self) -> float:
         """Verlet-list radius rc + skin [σ]."""
         return self.rc + self.skin
+
+
+@functools.cache
+def _schema_range(key: str) -> tuple[float, bool, float, bool]:
+    """(low, low exclusive, high, high exclusive) of ``potential.<key>`` in the config
+    schema (``workflow/schemas/config.schema.json``), the one statement of the range."""
+    from ..config import load_schema
+
+    s = load_schema()["$defs"]["md_scene"]["properties"]["potential"]["properties"][key]
+    lo_open, hi_open = "exclusiveMinimum" in s, "exclusiveMaximum" in s
+    lo = s["exclusiveMinimum"] if lo_open else s["minimum"]
+    hi = s["exclusiveMaximum"] if hi_open else s["maximum"]
+    return float(lo), lo_open, float(hi), hi_open
 
 
 @njit

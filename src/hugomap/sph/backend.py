@@ -386,12 +386,13 @@ class CSPHBackend:
         return Resources(mem, steps * n * S_PER_PARTICLE_STEP)
 
     # -- presentation ----------------------------------------------------------------------
-    def axis_labels(self) -> dict[str, tuple[str, float]]:
+    def figure_labels(self, scene: dict) -> dict:
         """SI, drawn as V [cm³/g] (×1e3 of m³/kg), P [GPa] (×1e-9 of Pa), velocities [m/s]."""
-        return {"V": ("specific volume V [cm³/g]", 1e3),
+        axes = {"V": ("specific volume V [cm³/g]", 1e3),
                 "P": ("longitudinal stress P = −σ_xx [GPa]", 1e-9),
                 "u_p_measured": ("particle velocity u_p [m/s]", 1.0),
                 "D": ("shock velocity D [m/s]", 1.0)}  # fmt: skip
+        return {"axes": axes, "tag": "CSPH", "reference": "model Hugoniot", "title": "CSPH"}
 
     def sound_speed(self, scene: dict) -> float:
         """The EOS's c0 (the solid's, also for a porous sample) [m/s]."""
@@ -440,3 +441,6 @@ def _inflow_tile(scene: dict, info: dict):
              rec["tile_length"], width, tile.n, rec["tile_n_pores"], tile.distention,
              rec["sample_distention_core"])  # fmt: skip
     return InflowTile.from_sample(tile), rec
+
+
+BACKEND = CSPHBackend()

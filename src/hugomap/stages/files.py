@@ -70,7 +70,9 @@ def info_of(ds: xr.Dataset) -> dict:
 def failure(out: str | os.PathLike, status: str, diagnostic: str, attrs: dict) -> Path:
     """A checkpoint stage's output when it cannot go on: attributes only."""
     log.error("%s: %s", status, diagnostic)
-    return write_netcdf(xr.Dataset(attrs={**attrs, "status": status, "diagnostic": diagnostic}), out)
+    return write_netcdf(
+        xr.Dataset(attrs={**attrs, "status": status, "diagnostic": diagnostic}), out
+    )
 
 
 def pole_vars(pole: Pole, backend) -> xr.Dataset:

@@ -49,4 +49,3 @@ def load_to_target(
     extra = xr.merge([history_vars(h), pole_vars(pole, b)])
     return b.save(sim, out, extra, {**attrs, "status": "ok", "cost": json.dumps(cost),
                                      INFO_ATTR: json.dumps(info)})  # fmt: skip
-

@@ -110,7 +110,9 @@ def log_progress(sim, h: History, frame: PistonFrame, x_start: list, wall: float
         x_start[0] = (gap, wall)
     gap0, w0 = x_start[0]
     done = 1.0 - gap / gap0 if gap0 > 0 else 1.0
-    eta = f"ETA {(wall - w0) * (1.0 - done) / done:.0f} s" if done > 0 else "ETA after the next line"
+    eta = (
+        f"ETA {(wall - w0) * (1.0 - done) / done:.0f} s" if done > 0 else "ETA after the next line"
+    )
     log.info(
         "progress: step %d, t = %.6g, front %.6g, %.0f %% of the drive, %s",
         sim.steps, sim.time, xf, 100.0 * min(max(done, 0.0), 1.0), eta,

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import xarray as xr
 
-from ..config import config_hash
 from ..io.atomic import write_netcdf
+from ..keys import config_hash
 from ..registry import backend as backend_of
 
 

@@ -1,0 +1,57 @@
+"""Config keys as text, point folder tags and config hashes.
+
+The small helpers that the config validation, the campaign's expansion, the solvers'
+scene checks (``md.scene_config``, ``sph.scene_config``), ``status`` and ``io.dataset`` share.
+This module imports nothing of hugomap, so each of them can use it without importing
+``config`` (or anything that imports ``config``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import re
+from collections.abc import Iterable
+from typing import Any
+
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: Integers longer than this (about 308 digits) are out of every range. Beyond about 14,000
+#: bits Python cannot even print them, which would crash jsonschema's own messages, so
+#: ``config`` refuses them before the schema runs.
+MAX_INT_BITS = 1024
+
+
+def show(value: Any, limit: int = 60) -> str:
+    """``repr`` of a config value, shortened to ``limit`` characters for a one-line message."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > MAX_INT_BITS:
+        return f"<integer of about {int(value.bit_length() * math.log10(2)) + 1} digits>"
+    try:
+        text = repr(value)
+    except (ValueError, RecursionError):  # an unprintable number, a self-containing value
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def key_path(parts: Iterable[Any]) -> str:
+    """A config key path as text: ``scenes.lj_liquid.shock.u_p[0]``; keys that are not
+    identifiers are quoted (``scenes['a b']``); the empty path is ``(top level)``."""
+    out = ""
+    for p in parts:
+        if isinstance(p, int) and not isinstance(p, bool):
+            out += f"[{p}]"
+        elif isinstance(p, str) and _IDENT.fullmatch(p):
+            out += f".{p}" if out else p
+        else:
+            out += f"[{show(p)}]"
+    return out or "(top level)"
+
+
+def point_tag(u: float) -> str:
+    """Folder tag of a piston velocity, ``up<tag>`` (6 significant digits: 2.0 -> '2')."""
+    return f"{float(u):.6g}"
+
+
+def config_hash(obj: Any) -> str:
+    """SHA-256 (first 16 hex digits) of the canonical JSON of ``obj``."""
+    return hashlib.sha256(json.dumps(obj, sort_keys=True).encode()).hexdigest()[:16]

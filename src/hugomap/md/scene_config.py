@@ -1,0 +1,96 @@
+"""Config of an MD scene (``solver: md``, Lennard-Jones reduced units): its cross-key checks.
+
+``hugomap.config.validate_config`` calls ``resolve_defaults`` and then ``check`` on every MD
+scene once the schema has passed (and filled its defaults). Validation runs when Snakemake
+parses the workflow, so this module stays light: no numba, no xarray.
+"""
+
+from __future__ import annotations
+
+from ..keys import point_tag
+
+#: Shock methods that run in the moving window (cut out of the loading checkpoint).
+WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
+
+
+def lattice_constant(rho: float) -> float:
+    """FCC lattice constant a = (4/ρ)^(1/3) [σ] at number density ρ [σ⁻³]."""
+    return (4.0 / rho) ** (1.0 / 3.0)
+
+
+def resolve_defaults(scene: dict) -> None:
+    """Every default of an MD scene is a constant the schema fills: nothing to resolve."""
+
+
+def check(base: str, scene: dict, cfg: dict) -> list[str]:
+    """Checks of an MD scene that involve several keys (``base``: its key path,
+    ``scenes.<name>``; ``cfg``: the whole config, for the top-level ``schemes``); each
+    message names every key it depends on."""
+    problems = []
+    smp, pot, sh = scene["sample"], scene["potential"], scene["shock"]
+    a = lattice_constant(smp["rho0"])
+    L = [c * a for c in smp["cells"]]
+    rlist = pot["rc"] + pot["skin"]
+    half_t = 0.5 * min(L[1], L[2])
+    box = f"sample.cells = {smp['cells']} at sample.rho0 = {smp['rho0']}"
+    if rlist > half_t:
+        # (1.0: the schema's exclusiveMinimum of potential.rc)
+        problems.append(
+            f"{base}.potential.rc = {pot['rc']}: rc + skin must not exceed half the "
+            f"transverse box; allowed range (1.0, {half_t - pot['skin']:.4g}] sigma "
+            f"with potential.skin = {pot['skin']} for {box}"
+        )
+    if sh["bin_width"] >= L[0] / 4:
+        problems.append(
+            f"{base}.shock.bin_width = {sh['bin_width']}: wider than the box allows; "
+            f"allowed range (0, {L[0] / 4:.4g}) sigma (a quarter of L_x = {L[0]:.4g} "
+            f"for {box})"
+        )
+    rest = L[0] * (1 - sh["load_fraction"])
+    if 2 * sh["gap"] + sh["rear_margin"] >= rest:
+        problems.append(
+            f"{base}.shock.gap = {sh['gap']}: 2·gap + shock.rear_margin "
+            f"(= {sh['rear_margin']}) must be shorter than the part of the sample left "
+            f"after loading, (1 - shock.load_fraction) L_x = {rest:.4g} sigma with "
+            f"shock.load_fraction = {sh['load_fraction']} for {box}"
+        )
+    w = scene["window"]
+    out = w["outflow"]
+    if out["tau_fast"] >= out["tau_slow"]:
+        problems.append(
+            f"{base}.window.outflow.tau_fast = {out['tau_fast']}: must be shorter than "
+            f"window.outflow.tau_slow = {out['tau_slow']}; allowed range (0, "
+            f"{out['tau_slow']:.4g}) tau"
+        )
+    schemes = scene.get("schemes", cfg.get("schemes", ["piston"]))
+    if any(s in WINDOW_SCHEMES for s in schemes) and w["ghost_width"] < pot["rc"]:
+        # the window stage (md.window.MDWindow) refuses a frozen layer thinner than rc
+        problems.append(
+            f"{base}.window.ghost_width = {w['ghost_width']}: the frozen outflow layer must "
+            f"be at least the cutoff potential.rc = {pot['rc']} thick; allowed range "
+            f"[{pot['rc']}, 20.0] sigma"
+        )
+    seen: dict[str, int] = {}
+    for i, u in enumerate(sh["u_p"]):
+        tag = point_tag(u)
+        if tag in seen:
+            problems.append(
+                f"{base}.shock.u_p[{i}] = {u}: same point folder up{tag} as "
+                f"shock.u_p[{seen[tag]}] = {sh['u_p'][seen[tag]]}; piston velocities "
+                f"must differ in their first 6 significant digits"
+            )
+        seen.setdefault(tag, i)
+    if scene["phase"] == "liquid" and "reference" in scene:
+        ref = scene["reference"]
+        rho_max = smp["rho0"] * max(ref["compressions"])
+        Lref = ref["cells"] * lattice_constant(rho_max)
+        if Lref < 2 * rlist:
+            problems.append(
+                f"{base}.reference.cells = {ref['cells']}: the periodic reference box of a "
+                f"phase = liquid scene at "
+                f"the highest compression (reference.compressions max "
+                f"{max(ref['compressions'])} x sample.rho0 = {smp['rho0']}) is "
+                f"{Lref:.3g} sigma, shorter than 2 (potential.rc + potential.skin) = "
+                f"{2 * rlist:.3g}; use more cells"
+            )
+    return problems
