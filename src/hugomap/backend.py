@@ -53,6 +53,10 @@ class Backend(Protocol):
     ) -> Path:  # fmt: skip
         """The solver's complete state as a verified checkpoint (bit-exact on resume)."""
 
+    def read_checkpoint(self, path: str | os.PathLike) -> xr.Dataset:
+        """A simulation checkpoint of this backend read whole and verified (format, checksum);
+        ``CheckpointError`` naming the file otherwise (unreadable, foreign, altered)."""
+
     def load(self, ds: xr.Dataset, source: str | os.PathLike | None = None) -> ShockSolver:
         """The simulation of a sample, loading or partial checkpoint (verified)."""
 

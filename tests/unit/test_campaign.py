@@ -22,6 +22,7 @@ from hugomap import campaign as cp
 from hugomap.cli import main
 from hugomap.config import ConfigError, validate_config
 from hugomap.failures import FAILURES
+from hugomap.registry import backend
 from hugomap.figures import stability_map_figure
 from hugomap.io.atomic import write_netcdf
 from hugomap.io.dataset import point_dataset
@@ -159,7 +160,8 @@ def _aggregates(tmp_path: Path, cfg: dict, outcome) -> list[Path]:
                 f = tmp_path / name / f"{scheme}_{u:g}.nc"
                 f.parent.mkdir(exist_ok=True)
                 ds = point_dataset(values, {"rho0": 8930.0}, None, scheme, name, status,
-                                   "synthetic" if status not in cp.USABLE else "", scene)  # fmt: skip
+                                   "synthetic" if status not in cp.USABLE else "", scene,
+                                       backend(scene).units)  # fmt: skip
                 write_netcdf(ds, f)
                 files.append(str(f))
         out.append(aggregate(files, str(ref_path), cfg, name, tmp_path / f"{name}.nc"))

@@ -21,7 +21,7 @@ import yaml
 from hugomap.cli import main
 from hugomap.config import validate_config
 from hugomap.io.atomic import write_json, write_netcdf
-from hugomap.io.dataset import point_dataset
+from hugomap.io.dataset import lj_units, point_dataset
 from hugomap.status import format_table, sweep_status
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -38,7 +38,9 @@ def _config() -> dict:
 
 def _point(path: Path, status: str, diagnostic: str, u: float) -> None:
     values = {"piston_velocity": u, "D": 3.0, "P": 10.0, "converged": status == "ok"}
-    ds = point_dataset(values, {"rho0": 0.8}, None, path.stem, "tiny", status, diagnostic, {})
+    ds = point_dataset(
+        values, {"rho0": 0.8}, None, path.stem, "tiny", status, diagnostic, {}, lj_units()
+    )
     write_netcdf(ds, path)
 
 

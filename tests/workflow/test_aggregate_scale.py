@@ -77,7 +77,9 @@ def _templates(folder: Path) -> list[tuple[bytes, str, str, bool]]:
         has_d = "D" in values
         if has_d:
             values["D"] = SENTINEL_D
-        ds = point_dataset(values, pole, h, "piston", "scale", status, diag, {"name": "scale"})
+        ds = point_dataset(
+            values, pole, h, "piston", "scale", status, diag, {"name": "scale"}, lj_units()
+        )
         path = write_netcdf(ds, folder / f"template{i}.nc")
         out.append((path.read_bytes(), status, diag, has_d))
     return out

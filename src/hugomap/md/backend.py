@@ -131,6 +131,11 @@ class MDBackend:
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
         return solver.save(out, extra=extra, attrs=attrs)
 
+    def read_checkpoint(self, path: str | os.PathLike) -> xr.Dataset:
+        from ..io.checkpoint import read_checkpoint, MD_CHECKPOINT
+
+        return read_checkpoint(path, kind=MD_CHECKPOINT)
+
     def load(self, ds: xr.Dataset, source: str | os.PathLike | None = None):
         from .simulation import MDSimulation
 

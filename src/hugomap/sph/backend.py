@@ -165,6 +165,11 @@ class CSPHBackend:
 
         return save_simulation(solver, out, extra=extra, attrs=attrs)
 
+    def read_checkpoint(self, path: str | os.PathLike) -> xr.Dataset:
+        from ..io.checkpoint import read_checkpoint, CSPH_CHECKPOINT
+
+        return read_checkpoint(path, kind=CSPH_CHECKPOINT)
+
     def load(self, ds: xr.Dataset, source: str | os.PathLike | None = None):
         from .checkpoint import from_dataset
 

@@ -12,16 +12,20 @@ Every stage is solver-agnostic: it asks the registry for the scene's backend
     reference_stage; aggregate
 """
 
-from .aggregate import aggregate
-from .control import control_point
-from .dichotomy import dichotomy_point, dichotomy_state, dichotomy_trial
-from .load import load_to_target
-from .piston import piston_point
-from .reference import reference_stage
-from .sample import prepare_sample
-from .window import window_start
+import importlib
 
-__all__ = [
-    "aggregate", "control_point", "dichotomy_point", "dichotomy_state", "dichotomy_trial",
-    "load_to_target", "piston_point", "prepare_sample", "reference_stage", "window_start",
-]  # fmt: skip
+# Each stage by the module it lives in; ``hugomap.stages.<name>`` resolves lazily (PEP 562),
+# so that importing one stage module does not import the others through this package.
+_STAGES = {
+    "aggregate": "aggregation", "control_point": "control", "dichotomy_point": "dichotomy",
+    "dichotomy_state": "dichotomy", "dichotomy_trial": "dichotomy", "load_to_target": "load",
+    "piston_point": "piston", "prepare_sample": "sample", "reference_stage": "reference",
+    "window_start": "window",
+}  # fmt: skip
+__all__ = sorted(_STAGES)
+
+
+def __getattr__(name: str):
+    if name in _STAGES:
+        return getattr(importlib.import_module(f"{__name__}.{_STAGES[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -77,14 +77,14 @@ def _resume_partial(b, part: Path, loaded: xr.Dataset) -> tuple[xr.Dataset, obje
     if not part.exists():
         return None
     try:
-        dp = open_dataset(part)
+        dp = b.read_checkpoint(part)  # format and checksum verified
         if dp.attrs.get("parent_checksum") != loaded.attrs.get("checksum"):
             raise CheckpointError(
                 str(part),
                 "it descends from another loading checkpoint (parent_checksum "
                 f"{dp.attrs.get('parent_checksum')!r}, loaded {loaded.attrs.get('checksum')!r})",
             )
-        resumed = dp, b.load(dp, part), history_of(dp)  # format and checksum verified
+        resumed = dp, b.load(dp, part), history_of(dp)
     except (CheckpointError, OSError, ValueError, KeyError) as exc:
         log.warning(
             "ignoring partial checkpoint %s, restarting from the loaded state: %s", part, exc

@@ -19,7 +19,7 @@ import xarray as xr
 from ..backend import WindowStart
 from ..io.dataset import si_units
 from ..states import ControlParams, PistonFrame, Pole, Resources
-from .model import FIELDS, SyntheticPiston, SyntheticWindow, shocked_state
+from .model import FIELDS, PISTON, SyntheticPiston, SyntheticWindow, shocked_state
 
 log = logging.getLogger("hugomap")
 
@@ -62,6 +62,11 @@ class SyntheticBackend:
 
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset | None, attrs: dict) -> Path:
         return solver.save(out, extra, attrs)
+
+    def read_checkpoint(self, path: str | os.PathLike) -> xr.Dataset:
+        from ..io.checkpoint import read_checkpoint
+
+        return read_checkpoint(path, kind=PISTON)
 
     def load(self, ds: xr.Dataset, source: str | os.PathLike | None = None) -> SyntheticPiston:
         return SyntheticPiston.from_dataset(ds, source)
