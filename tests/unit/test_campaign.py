@@ -22,10 +22,10 @@ from hugomap import campaign as cp
 from hugomap.cli import main
 from hugomap.config import ConfigError, validate_config
 from hugomap.failures import FAILURES
-from hugomap.registry import backend
 from hugomap.figures import stability_map_figure
 from hugomap.io.atomic import write_netcdf
 from hugomap.io.dataset import point_dataset
+from hugomap.registry import backend
 from hugomap.stages import aggregate
 
 C0, S = 3940.0, 1.49

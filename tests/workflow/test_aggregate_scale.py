@@ -44,7 +44,7 @@ import pytest
 import xarray as xr
 
 from hugomap.io.atomic import write_netcdf
-from hugomap.io.dataset import POINT_VARS, POLE_VARS, point_dataset
+from hugomap.io.dataset import POINT_VARS, POLE_VARS, lj_units, point_dataset
 
 N_POINTS = int(os.environ.get("HUGOMAP_SCALE_POINTS", "2000"))
 N_HISTORY = 4000

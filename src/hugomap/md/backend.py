@@ -132,7 +132,7 @@ class MDBackend:
         return solver.save(out, extra=extra, attrs=attrs)
 
     def read_checkpoint(self, path: str | os.PathLike) -> xr.Dataset:
-        from ..io.checkpoint import read_checkpoint, MD_CHECKPOINT
+        from ..io.checkpoint import MD_CHECKPOINT, read_checkpoint
 
         return read_checkpoint(path, kind=MD_CHECKPOINT)
 

@@ -166,7 +166,7 @@ class CSPHBackend:
         return save_simulation(solver, out, extra=extra, attrs=attrs)
 
     def read_checkpoint(self, path: str | os.PathLike) -> xr.Dataset:
-        from ..io.checkpoint import read_checkpoint, CSPH_CHECKPOINT
+        from ..io.checkpoint import CSPH_CHECKPOINT, read_checkpoint
 
         return read_checkpoint(path, kind=CSPH_CHECKPOINT)
 
