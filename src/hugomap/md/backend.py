@@ -220,6 +220,8 @@ class MDBackend:
         return WindowStart(win, wpole, sig, {f"inflow_{k}": v for k, v in inflow.items()})
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
+        """The configured times; MW's gain_position is per window_time (so per τ it is
+        gain_position/window_time)."""
         w = scene["window"]
         d = w["dichotomy"]
         return ControlParams(
@@ -228,8 +230,8 @@ class MDBackend:
             calm_windows=w["calm_windows"], max_windows=w["max_windows"], z=w["z"],
             max_drift=w["drift_fraction"] * window.geom.length / w["average_time"],
             beta=w["amw"]["beta"], gain_rate=w["mw"]["gain_rate"],
-            gain_position=w["mw"]["gain_position"], target=w["front_fraction"],
-            outflow_gap=scene["shock"]["gap"],
+            gain_position=w["mw"]["gain_position"] / w["window_time"],
+            target=w["front_fraction"], outflow_gap=scene["shock"]["gap"],
         )  # fmt: skip
 
     # -- the reference ---------------------------------------------------------------------
