@@ -16,6 +16,11 @@ kept, because the machine may be shared.
     python benchmarks/md_lj.py                 # hugomap and (if installed) LAMMPS, 1 and 2 threads
     python benchmarks/md_lj.py --million       # also peak memory at 10^6 atoms (hugomap)
     python benchmarks/md_lj.py --no-lammps --repeat 1
+    python benchmarks/md_lj.py --no-lammps --half --threads 1   # the half-list kernel
+
+``MDSimulation`` runs the full-list kernel at any thread count (its default); ``--half``
+times its half-list, Newton's-third-law kernel instead (serial; the rows then say so in
+``variant``).
 
 Output: one JSON object per line (keys ``code``, ``threads``, ``atoms``, ``steps``,
 ``s_per_atom_step``, ``peak_rss_mb``, ``machine``, ...), then one line with the ratio
@@ -92,7 +97,7 @@ def run_child(cmd: list[str], env: dict) -> tuple[str, int, float]:
 
 
 # -- hugomap worker (runs in a subprocess) -------------------------------------------------------
-def hugomap_worker(cells: int, steps: int) -> None:
+def hugomap_worker(cells: int, steps: int, half: bool = False) -> None:
     import numba
 
     from hugomap.md.potential import LJParams
@@ -102,9 +107,9 @@ def hugomap_worker(cells: int, steps: int) -> None:
     lj = LJParams(rc=RC, shift=False, skin=SKIN)
     # Warm-up: every kernel (list build with sort, forces, integration) on a small box, so
     # that loading or compiling the numba code is not timed.
-    warm = MDSimulation(fcc_state((4, 4, 4), RHO, T_INIT, 1, True), lj, DT)
+    warm = MDSimulation(fcc_state((4, 4, 4), RHO, T_INIT, 1, True), lj, DT, use_half=half)
     warm.advance(30)
-    sim = MDSimulation(fcc_state((cells,) * 3, RHO, T_INIT, SEED, True), lj, DT)
+    sim = MDSimulation(fcc_state((cells,) * 3, RHO, T_INIT, SEED, True), lj, DT, use_half=half)
     builds0 = sim.list_builds
     ru0 = resource.getrusage(resource.RUSAGE_SELF)
     t0 = time.perf_counter()
@@ -129,9 +134,10 @@ def hugomap_worker(cells: int, steps: int) -> None:
     )
 
 
-def hugomap_row(threads: int, cells: int, steps: int, mach: dict) -> dict:
+def hugomap_row(threads: int, cells: int, steps: int, mach: dict, half: bool = False) -> dict:
     env = {**os.environ, "NUMBA_NUM_THREADS": str(threads), "OMP_NUM_THREADS": "1"}
     cmd = [sys.executable, __file__, "--worker", "--cells", str(cells), "--steps", str(steps)]
+    cmd += ["--half"] if half else []
     load = os.getloadavg()[0]
     out, rc, rss_kb = run_child(cmd, env)
     m = re.search(r"^RESULT (.*)$", out, re.M)
@@ -250,6 +256,9 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="rounds; the fastest run is kept")
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--no-lammps", action="store_true")
+    ap.add_argument(
+        "--half", action="store_true", help="hugomap on the half list (Newton 3rd law, serial)"
+    )
     ap.add_argument("--million", action="store_true", help="also peak memory at 10^6 atoms")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--rss-wrap", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
@@ -257,7 +266,7 @@ def main() -> None:
     if a.rss_wrap:
         rss_wrap(a.rss_wrap)
     if a.worker:
-        hugomap_worker(a.cells, a.steps)
+        hugomap_worker(a.cells, a.steps, a.half)
         return
 
     mach = machine()
@@ -277,7 +286,7 @@ def main() -> None:
         for _ in range(a.repeat):
             for k, (code, c) in enumerate(configs):
                 if code == "hugomap":
-                    results[k].append(hugomap_row(c, a.cells, a.steps, mach))
+                    results[k].append(hugomap_row(c, a.cells, a.steps, mach, a.half))
                 else:
                     results[k].append(lammps_row(c, work, a.cells, a.steps, mach))
 

@@ -8,9 +8,10 @@ W_i^{ab} = ½ Σ_j r_ij^a F_ij^b  [ε]; with the kinetic part it gives the press
 region of volume V:  P^{ab} V = Σ_i m (v_i^a − ū^a)(v_i^b − ū^b) + Σ_i W_i^{ab}.
 Components are stored in the order xx, yy, zz, xy, xz, yz (``VIRIAL_COMPONENTS``).
 
-The pair loops are branch-free (a 0/1 mask instead of ``if r2 < rc2``) so that LLVM can
-vectorise them; the full-list kernel runs rows in parallel, the half-list kernel serially
-with Newton's third law (half the pair work, for one thread).
+The pair loops are branch-free (``lj_pair``'s cutoff is a select, not ``if r2 < rc2``) so
+that LLVM can vectorise them once ``lj_pair`` is inlined; the full-list kernel runs rows in
+parallel, the half-list kernel serially with Newton's third law (half the pair work, for one
+thread).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..numba_conf import njit, pjit, prange
+from .potential import lj_pair
 
 VIRIAL_COMPONENTS = ("xx", "yy", "zz", "xy", "xz", "yz")
 
@@ -60,10 +62,7 @@ def forces_full(
             dy -= Lp1 * np.rint(dy * iL1)
             dz -= Lp2 * np.rint(dz * iL2)
             r2 = dx * dx + dy * dy + dz * dz
-            inv2 = 1.0 / r2
-            inv6 = inv2 * inv2 * inv2
-            fr = 24.0 * inv2 * inv6 * (2.0 * inv6 - 1.0)
-            fr = fr if r2 < rc2 else 0.0
+            _, fr = lj_pair(r2, rc2, 0.0)  # the energy is unused here (removed as dead code)
             fx += fr * dx
             fy += fr * dy
             fz += fr * dz
@@ -120,10 +119,7 @@ def forces_half(
             dy -= Lp1 * np.rint(dy * iL1)
             dz -= Lp2 * np.rint(dz * iL2)
             r2 = dx * dx + dy * dy + dz * dz
-            inv2 = 1.0 / r2
-            inv6 = inv2 * inv2 * inv2
-            fr = 24.0 * inv2 * inv6 * (2.0 * inv6 - 1.0)
-            fr = fr if r2 < rc2 else 0.0
+            _, fr = lj_pair(r2, rc2, 0.0)  # the energy is unused here (removed as dead code)
             gx = fr * dx
             gy = fr * dy
             gz = fr * dz
@@ -177,17 +173,14 @@ def energy_virial_full(
             dy -= Lp[1] * np.rint(dy / L[1])
             dz -= Lp[2] * np.rint(dz / L[2])
             r2 = dx * dx + dy * dy + dz * dz
-            if r2 < rc2:
-                inv2 = 1.0 / r2
-                inv6 = inv2 * inv2 * inv2
-                e += 4.0 * inv6 * (inv6 - 1.0) - ushift
-                fr = 24.0 * inv2 * inv6 * (2.0 * inv6 - 1.0)
-                wxx += fr * dx * dx
-                wyy += fr * dy * dy
-                wzz += fr * dz * dz
-                wxy += fr * dx * dy
-                wxz += fr * dx * dz
-                wyz += fr * dy * dz
+            u, fr = lj_pair(r2, rc2, ushift)  # both 0 beyond rc: adding them changes nothing
+            e += u
+            wxx += fr * dx * dx
+            wyy += fr * dy * dy
+            wzz += fr * dz * dz
+            wxy += fr * dx * dy
+            wxz += fr * dx * dz
+            wyz += fr * dy * dz
         pe[i] = 0.5 * e
         vir[i, 0] = 0.5 * wxx
         vir[i, 1] = 0.5 * wyy

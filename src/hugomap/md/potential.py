@@ -74,11 +74,21 @@ def lj_energy_unshifted(r2: float) -> float:
 def lj_pair(r2: float, rc2: float, ushift: float) -> tuple[float, float]:
     """Energy U(r) [ε] and F(r)/r = −(dU/dr)/r [ε σ⁻²] of one pair, zero beyond ``rc``.
 
-    F/r = 48 r^-14 − 24 r^-8 = 24 r^-2 r^-6 (2 r^-6 − 1). Multiply by the separation vector
-    r_i − r_j to get the force on i.
+        U   = 4 r⁻⁶ (r⁻⁶ − 1) − U_c,
+        F/r = 48 r⁻¹⁴ − 24 r⁻⁸ = 24 r⁻² r⁻⁶ (2 r⁻⁶ − 1)      (r < rc; both 0 for r ≥ rc),
+
+    with ``r2`` = r² [σ²], ``rc2`` = rc² [σ²] and ``ushift`` = U_c [ε] (module docstring).
+    Multiply F/r by the separation vector r_i − r_j to get the force on i.
+
+    This is the one definition of the pair terms: the kernels of ``forces`` call it in their
+    pair loops (numba inlines it there; a caller that needs only F/r loses nothing, the unused
+    energy is removed as dead code).
     """
-    if r2 >= rc2:
-        return 0.0, 0.0
+    # Branch-free: the cutoff is a select, not a branch, so that the kernels' pair loops stay
+    # vectorisable once this is inlined; beyond rc the terms are computed and discarded.
     inv2 = 1.0 / r2
     inv6 = inv2 * inv2 * inv2
-    return 4.0 * inv6 * (inv6 - 1.0) - ushift, 24.0 * inv2 * inv6 * (2.0 * inv6 - 1.0)
+    inside = r2 < rc2
+    u = 4.0 * inv6 * (inv6 - 1.0) - ushift if inside else 0.0
+    fr = 24.0 * inv2 * inv6 * (2.0 * inv6 - 1.0) if inside else 0.0
+    return u, fr

@@ -3,11 +3,11 @@
 Equations: Parshikov & Medin, J. Comput. Phys. 180(1), 2002 (doi:10.1006/jcph.2002.7099), as
 written in the seed talk (../shared/seed/SEED-en.md), in 2D plane strain (1D: uniaxial strain,
 y terms vanish). Stress σ = −P I + S (tension positive), S deviatoric; ∇_i W_ij = −W'_ij e_ij
-with e_ij = (r_j − r_i)/r_ij the unit vector from i to j and W' = dW/dr (r_ij, h_ij) ≤ 0,
-h_ij = θ (l_i + l_j). Per pair, the acoustic Riemann solution (``riemann.contact``) along e
-(normal: longitudinal impedance ρ c_l and σ_n = e·σ·e; tangential t = (−e_y, e_x): shear
-impedance ρ c_s and τ = t·σ·e) gives the contact velocity U* = u* e + w* t and traction
-σ*·e = σ_n* e + τ* t. Then
+with e_ij = (r_j − r_i)/r_ij the unit vector from i to j and W' = dW/dr (r_ij, h_ij) ≤ 0
+(``kernel.dwdr``), h_ij = θ (l_i + l_j) (``kernel.pair_h``). Per pair, the acoustic Riemann
+solution (``riemann.contact``) along e (normal: longitudinal impedance ρ c_l and
+σ_n = e·σ·e; tangential t = (−e_y, e_x): shear impedance ρ c_s and τ = t·σ·e) gives the
+contact velocity U* = u* e + w* t and traction σ*·e = σ_n* e + τ* t. Then
 
     dv_i/dt     = −2 Σ_j m_j/(ρ_i ρ_j) (σ*_ij · e_ij) W'_ij                       [m/s²]
     dE_i/dt     = −2 Σ_j m_j/(ρ_i ρ_j) (σ*_ij · e_ij) · U*_ij W'_ij               [W/kg]
@@ -45,6 +45,8 @@ import numpy as np
 from ..eos import eos_pc
 from ..numba_conf import njit, pjit, prange
 from ..strength.von_mises import radial_return
+from .kernel import dwdr, pair_h
+from .riemann import contact
 
 # Columns of the packed per-particle array (real particles, then wall ghosts).
 PX, PY, PVX, PVY, PM, PRHO, PL, PSXX, PSYY, PSXY, PZL, PZS, PCL, PBXX, PBXY, PBYY = range(16)
@@ -143,7 +145,6 @@ def correction(
     Ly = length[1] if periodic[1] else 0.0
     iLx = 1.0 / length[0] if periodic[0] else 0.0
     iLy = 1.0 / length[1] if periodic[1] else 0.0
-    cw = -15.0 / 8.0 if dim == 1 else -35.0 / (4.0 * math.pi)
     for i in prange(n):
         bxx = 1.0
         bxy = 0.0
@@ -163,13 +164,7 @@ def correction(
                 dy -= Ly * np.rint(dy * iLy)
                 r2 = dx * dx + dy * dy
                 r = math.sqrt(r2)
-                h = theta * (li + pk[j, PL])
-                q = r / h
-                b = max(0.0, 1.0 - 0.5 * q)
-                if dim == 1:
-                    wp = cw * q * b * b / (h * h)
-                else:
-                    wp = cw * q * b * b * b / (h * h * h)
+                wp = dwdr(r, pair_h(li, pk[j, PL], theta), dim)
                 gm = -pk[j, PM] / pk[j, PRHO] * wp / r
                 mxx += gm * dx * dx
                 mxy += gm * dx * dy
@@ -210,10 +205,6 @@ def pair_rates(
     Ly = length[1] if periodic[1] else 0.0
     iLx = 1.0 / length[0] if periodic[0] else 0.0
     iLy = 1.0 / length[1] if periodic[1] else 0.0
-    if dim == 1:
-        cw = -15.0 / 8.0
-    else:
-        cw = -35.0 / (4.0 * math.pi)
     for i in prange(n):
         xi = pk[i, PX]
         yi = pk[i, PY]
@@ -247,13 +238,7 @@ def pair_rates(
             ir = 1.0 / r
             ex = dx * ir
             ey = dy * ir
-            h = theta * (li + pk[j, PL])
-            q = r / h
-            b = max(0.0, 1.0 - 0.5 * q)
-            if dim == 1:
-                wp = cw * q * b * b / (h * h)
-            else:
-                wp = cw * q * b * b * b / (h * h * h)
+            wp = dwdr(r, pair_h(li, pk[j, PL], theta), dim)
             vxj = pk[j, PVX]
             vyj = pk[j, PVY]
             sxxj = pk[j, PSXX]
@@ -272,15 +257,9 @@ def pair_rates(
             snj = txj * ex + tyj * ey
             tti = tyi * ex - txi * ey
             ttj = tyj * ex - txj * ey
-            zlj = pk[j, PZL]
-            zsj = pk[j, PZS]
-            izl = 1.0 / (zli + zlj)
-            ustar = (zli * ui + zlj * uj + snj - sni) * izl
-            sstar = (zlj * sni + zli * snj + zli * zlj * (uj - ui)) * izl
-            zs = zsi + zsj
-            izs = 1.0 / max(zs, 1e-300)
-            wstar = (zsi * wi + zsj * wj + ttj - tti) * izs if zs > 0.0 else 0.5 * (wi + wj)
-            tstar = (zsj * tti + zsi * ttj + zsi * zsj * (wj - wi)) * izs
+            # contact states: longitudinal (u*, σ_n*) and shear (w*, τ*) Riemann problems
+            ustar, sstar = contact(ui, sni, zli, uj, snj, pk[j, PZL])
+            wstar, tstar = contact(wi, tti, zsi, wj, ttj, pk[j, PZS])
             mj = pk[j, PM]
             vj = mj / pk[j, PRHO]
             # corrected pair gradient g = −W' B̄ e, B̄ = ½(B_i + B_j) (antisymmetric in ij)

