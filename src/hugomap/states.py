@@ -117,6 +117,28 @@ class ControlParams:
     target: float
     outflow_gap: float
 
+    @classmethod
+    def from_window(
+        cls, w: dict, length: float, gap: float, times: tuple[float, float] | None = None
+    ) -> ControlParams:
+        """From a validated ``window`` block: ``times`` (window_time, average_time) where the
+        backend derives them, else the configured ones; the dichotomy's trial as long as one
+        averaging window and its final average as AMW/MW's unless configured; max_drift =
+        drift_fraction L/average_time for a window of ``length``; MW's gain_position per
+        window_time; the slab behind the front ``window.outflow_gap`` (default ``gap``) from
+        the outflow edge."""
+        wt, avg = times if times is not None else (w["window_time"], w["average_time"])
+        d = w["dichotomy"]
+        return cls(
+            window_time=wt, average_time=avg, trial_time=d.get("trial_time") or wt,
+            final_time=d.get("final_time") or avg, every=w["sample_every"],
+            calm_windows=w["calm_windows"], max_windows=w["max_windows"], z=w["z"],
+            max_drift=w["drift_fraction"] * length / avg, beta=w["amw"]["beta"],
+            gain_rate=float(w["mw"]["gain_rate"]),
+            gain_position=float(w["mw"]["gain_position"]) / wt, target=w["front_fraction"],
+            outflow_gap=w.get("outflow_gap") or gap,
+        )  # fmt: skip
+
 
 class Profile(Protocol):
     """A backend's reader of its raw profile sums (``solver.profile_sums(bin_width)``, bins

@@ -220,21 +220,10 @@ class MDBackend:
         return WindowStart(win, wpole, sig, {f"inflow_{k}": v for k, v in inflow.items()})
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
-        """The configured times; MW's gain_position is per window_time (so per τ it is
-        gain_position/window_time)."""
-        w = scene["window"]
-        d = w["dichotomy"]
-        return ControlParams(
-            window_time=w["window_time"], average_time=w["average_time"],
-            trial_time=d["trial_time"], final_time=d["final_time"], every=w["sample_every"],
-            calm_windows=w["calm_windows"], max_windows=w["max_windows"], z=w["z"],
-            max_drift=w["drift_fraction"] * window.geom.length / w["average_time"],
-            beta=w["amw"]["beta"], gain_rate=w["mw"]["gain_rate"],
-            gain_position=w["mw"]["gain_position"] / w["window_time"],
-            target=w["front_fraction"], outflow_gap=scene["shock"]["gap"],
-        )  # fmt: skip
+        """The configured times (``ControlParams.from_window``)."""
+        return ControlParams.from_window(scene["window"], window.geom.length,
+                                         scene["shock"]["gap"])  # fmt: skip
 
-    # -- the reference ---------------------------------------------------------------------
     def reference_inputs(self, scene: dict) -> dict:
         """What the equilibrium reference depends on (``reference`` reads nothing else):
         the potential block, the pole (``sample.rho0`` [σ⁻³], ``sample.T0`` [ε/k_B]), the

@@ -264,23 +264,12 @@ class CSPHBackend:
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
         """Times default to the window's sound crossing: window_time = L/(c0 + s u_p),
-        average_time = 2 window_time; the dichotomy's trial as long as one averaging window,
-        its final average as AMW/MW's. MW's gain_position is per window_time."""
+        average_time = 2 window_time (``ControlParams.from_window`` for the rest)."""
         w, e = scene["window"], scene["material"]["eos"]
-        d = w["dichotomy"]
         wt = w.get("window_time") or w["length"] / (e["c0"] + e["s"] * u_p)
         avg = w.get("average_time") or 2.0 * wt
-        return ControlParams(
-            window_time=wt, average_time=avg, trial_time=d.get("trial_time") or wt,
-            final_time=d.get("final_time") or avg, every=w["sample_every"],
-            calm_windows=w["calm_windows"], max_windows=w["max_windows"], z=w["z"],
-            max_drift=w["drift_fraction"] * window.geom.length / avg, beta=w["amw"]["beta"],
-            gain_rate=float(w["mw"]["gain_rate"]),
-            gain_position=float(w["mw"]["gain_position"]) / wt, target=w["front_fraction"],
-            outflow_gap=w.get("outflow_gap", scene["shock"]["gap"]),
-        )  # fmt: skip
+        return ControlParams.from_window(w, window.geom.length, scene["shock"]["gap"], (wt, avg))
 
-    # -- the reference ---------------------------------------------------------------------
     def reference_inputs(self, scene: dict) -> None:
         """None: the model's Hugoniot is computed per scene in milliseconds."""
         return None

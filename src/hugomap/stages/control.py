@@ -12,7 +12,7 @@ from ..registry import backend as backend_of
 from ..window.methods import amw, mw
 from ..window.steady import steady_state
 from .files import Clock
-from .windows import open_window, prior_cost, window_point
+from .windows import failed_point, open_window, prior_cost, window_point
 
 log = logging.getLogger("hugomap")
 
@@ -27,13 +27,12 @@ def control_point(
     b = backend_of(scene)
     clock = Clock()
     if scheme not in ("amw", "mw"):
-        return window_point(out, b, scheme, scene, u_p, None, None, {}, clock.cost(),
-                            "bad_config", f"scheme {scheme} is not a control scheme (amw, mw)")  # fmt: skip
+        return failed_point(out, b, scheme, scene, u_p, clock, "bad_config",
+                            f"scheme {scheme} is not a control scheme (amw, mw)")  # fmt: skip
     try:
         win, sig, pole, ds, profile = open_window(b, window0, scene)
     except HugomapFailure as exc:
-        return window_point(out, b, scheme, scene, u_p, None, None, {}, clock.cost(),
-                            exc.status, exc.diagnostic)  # fmt: skip
+        return failed_point(out, b, scheme, scene, u_p, clock, exc.status, exc.diagnostic)
     clock.add(prior_cost(ds))
     cp = b.control_params(scene, u_p, win)
     sh = scene["shock"]

@@ -22,7 +22,7 @@ from ..window import dichotomy as dich
 from ..window.methods import fixed_run
 from ..window.steady import steady_state
 from .files import Clock, open_dataset
-from .windows import open_window, prior_cost, window_point
+from .windows import failed_point, open_window, prior_cost, window_point
 
 log = logging.getLogger("hugomap")
 
@@ -93,8 +93,7 @@ def dichotomy_point(
     try:
         win, sig, pole, ds, profile = open_window(b, window0, scene)
     except HugomapFailure as exc:
-        return window_point(out, b, scheme, scene, u_p, None, None, {}, clock.cost(),
-                            exc.status, exc.diagnostic)  # fmt: skip
+        return failed_point(out, b, scheme, scene, u_p, clock, exc.status, exc.diagnostic)
     clock.add(prior_cost(ds))
     bis = np.array([[t["u_out"], t.get("slope", np.nan)] for t in s["trials"]], dtype=float)
     bis = bis.reshape(-1, 2)

@@ -47,9 +47,16 @@ def window_point(
                        hist, status, diagnostic, more, attrs)  # fmt: skip
 
 
+def failed_point(out, b, scheme: str, scene: dict, u_p: float, clock, status: str,
+                 diagnostic: str) -> Path:  # fmt: skip
+    """A window point that has no window to run: its status and this job's cost."""
+    return window_point(out, b, scheme, scene, u_p, None, None, {}, clock.cost(), status,
+                        diagnostic)  # fmt: skip
+
+
 def prior_cost(ds) -> dict:
     """The cost carried by a window checkpoint (loading and window set-up)."""
     return json.loads(ds.attrs.get("cost", "{}"))
 
 
-__all__ = ["Path", "open_window", "prior_cost", "window_point"]
+__all__ = ["failed_point", "open_window", "prior_cost", "window_point"]

@@ -109,17 +109,9 @@ class SyntheticBackend:
         return WindowStart(win, pole, sig, {})
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
-        w = scene["window"]
-        d = w["dichotomy"]
-        return ControlParams(
-            window_time=w["window_time"], average_time=w["average_time"],
-            trial_time=d["trial_time"], final_time=d["final_time"], every=w["sample_every"],
-            calm_windows=w["calm_windows"], max_windows=w["max_windows"], z=w["z"],
-            max_drift=w["drift_fraction"] * window.geom.length / w["average_time"],
-            beta=w["amw"]["beta"], gain_rate=w["mw"]["gain_rate"],
-            gain_position=w["mw"]["gain_position"] / w["window_time"],
-            target=w["front_fraction"], outflow_gap=scene["shock"]["gap"],
-        )  # fmt: skip
+        """The configured times (``ControlParams.from_window``)."""
+        return ControlParams.from_window(scene["window"], window.geom.length,
+                                         scene["shock"]["gap"])  # fmt: skip
 
     def reference_inputs(self, scene: dict) -> None:
         return None

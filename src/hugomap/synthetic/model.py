@@ -61,6 +61,19 @@ def _bin_sums(x0: float, width: float, nbins: int, regions, area: float, m: floa
     return out
 
 
+def _save(state: dict, kind: CheckpointKind, out, extra: xr.Dataset | None, attrs: dict) -> Path:
+    """A checkpoint: ``extra`` variables, ``attrs`` and the model's state (JSON), sealed."""
+    ds = xr.Dataset() if extra is None else extra.copy()
+    ds.attrs.update(attrs, synthetic_state=json.dumps(state))
+    return write_netcdf(seal_checkpoint(ds, kind), out)
+
+
+def _state(ds: xr.Dataset, source, kind: CheckpointKind) -> dict:
+    """The model's state in a checkpoint of ``kind``, verified first."""
+    verify_checkpoint(ds, source, kind)
+    return json.loads(ds.attrs["synthetic_state"])
+
+
 class SyntheticPiston:
     """A piston run of the model (module docstring), with the ``ShockSolver`` protocol."""
 
@@ -124,14 +137,11 @@ class SyntheticPiston:
                 "t_start": self.t_start, "x_start": self.x_start}  # fmt: skip
 
     def save(self, out: str | os.PathLike, extra: xr.Dataset | None, attrs: dict) -> Path:
-        ds = xr.Dataset() if extra is None else extra.copy()
-        ds.attrs.update(attrs, synthetic_state=json.dumps(self.state()))
-        return write_netcdf(seal_checkpoint(ds, PISTON), out)
+        return _save(self.state(), PISTON, out, extra, attrs)
 
     @classmethod
     def from_dataset(cls, ds: xr.Dataset, source=None) -> SyntheticPiston:
-        verify_checkpoint(ds, source, PISTON)
-        st = json.loads(ds.attrs["synthetic_state"])
+        st = _state(ds, source, PISTON)
         sim = cls(st["material"], st["length"], st["area"], st["dt"], st["m"])
         sim.steps, sim.v_left = st["steps"], st["v_left"]
         sim.t_start, sim.x_start = st["t_start"], st["x_start"]
@@ -188,14 +198,11 @@ class SyntheticWindow(SyntheticFront):
                                for a, b in self._amplitudes]}  # fmt: skip
 
     def save(self, out: str | os.PathLike, extra: xr.Dataset | None, attrs: dict) -> Path:
-        ds = xr.Dataset() if extra is None else extra.copy()
-        ds.attrs.update(attrs, synthetic_state=json.dumps(self.state()))
-        return write_netcdf(seal_checkpoint(ds, WINDOW), out)
+        return _save(self.state(), WINDOW, out, extra, attrs)
 
     @classmethod
     def from_dataset(cls, ds: xr.Dataset, source=None) -> SyntheticWindow:
-        verify_checkpoint(ds, source, WINDOW)
-        st = json.loads(ds.attrs["synthetic_state"])
+        st = _state(ds, source, WINDOW)
         w = cls(st["material"], st["u_in"], st["u_out"], st["length"], 0.0, st["dt"], st["m"])
         w.step, w.x_f, w.rho1 = st["step"], st["x_f"], st["rho1"]
         w._amplitudes = [(a if a > -1e300 else -np.inf, b) for a, b in st["amplitudes"]]
