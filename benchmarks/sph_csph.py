@@ -10,7 +10,7 @@ compilation (a small scene goes through every kernel first) and the warm-up are 
 Each thread count runs in its own subprocess (NUMBA_NUM_THREADS is read at import); rows
 repeat in rounds and the fastest of each is kept (the machine may be shared).
 
-For scale, the PySPH 1.0b2 reference (../shared/FACTS.md, "SPH speed"): its 2D
+For scale, the PySPH 1.0b2 reference (measured on this machine kind): its 2D
 elastic-plastic ``solid_mech.impact`` example, 16,258 particles, ran at 9.0e-6 s per
 particle-step on one thread of this machine kind (5.6e-6 on two); the issue's target is at
 most 3e-6 on one core. The comparison is of scale only: different scene, scheme and code.
@@ -110,7 +110,9 @@ def main() -> None:
         ref = PYSPH_1T if t == 1 else PYSPH_2T if t == 2 else None
         row.update(machine)
         row["pysph_1.0b2_reference_s_per_particle_step"] = ref
-        row["pysph_note"] = "PySPH 1.0b2 solid_mech.impact, 16,258 particles (FACTS.md)"
+        row["pysph_note"] = (
+            "PySPH 1.0b2 solid_mech.impact, 16,258 particles (measured on this machine kind)"
+        )
         if t == 1:
             row["target_s_per_particle_step"] = TARGET_1T
         print(json.dumps(row))

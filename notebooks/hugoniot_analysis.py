@@ -142,7 +142,7 @@ for name, ds in scenes.items():
 # Per point: CPU seconds (all stages of the point: loading, window set-up, control or
 # trials, averaging) against the relative error of P and of D from the scene's reference
 # Hugoniot at the point's u_p (MW: the amplitude it reached). This is the sweep's version
-# of the campaign chart (issue 5), from whatever points this results folder holds.
+# of the campaign chart, from whatever points this results folder holds.
 
 # %%
 rows = []

@@ -2,7 +2,7 @@
 
 A stage that cannot reach its goal ends with a named status and a diagnostic, never a value:
 ``FAILURES`` lists every such status with its class and cause, and the stage raises a
-``HugomapFailure`` subclass carrying ``status`` and ``diagnostic`` that the pipeline writes
+``HugomapFailure`` subclass carrying ``status`` and ``diagnostic`` that the stages write
 to the point file. ``CheckpointError`` is the other kind: a checkpoint file refused as input
 (unreadable, foreign, too old or altered); it carries the file and the problem, not a status.
 

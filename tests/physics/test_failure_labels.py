@@ -1,5 +1,5 @@
 """Every failure mode of the stability map is detected and labelled, not written as a point
-(issue 5): real runs of the pipeline stages on a 1D CSPH window, pushed into each failure.
+real runs of the stages on a 1D CSPH window, pushed into each failure.
 
 Set-up: 1D copper without strength (200 particles of 10 µm), u_p = 1000 m/s, the window
 (100 dx, front at 0.6 L) cut by ``window_start`` with ``window.start_offset = 0.02``: a frame

@@ -1,7 +1,7 @@
 """Checkpoint integrity: a format version and a SHA-256 checksum in every MD and window
 checkpoint; a corrupted (flipped bytes, truncated, edited attribute, dropped variable),
 foreign, outdated or newer checkpoint is refused with ``CheckpointError`` naming the file
-and the problem, never used. In the pipeline, a refused periodic checkpoint of a piston run
+and the problem, never used. In the piston stage, a refused periodic checkpoint of a piston run
 (``<out>.part.nc``) is logged and ignored: the run restarts from the loading checkpoint.
 """
 
@@ -238,7 +238,7 @@ def test_window_checkpoint_roundtrip_and_refusals(tmp_path: Path) -> None:
     assert str(plain) in str(info.value)
 
 
-# -- the pipeline's periodic checkpoint of a piston run --------------------------------------
+# -- the piston stage's periodic checkpoint of a piston run --------------------------------------
 
 
 class Killed(BaseException):

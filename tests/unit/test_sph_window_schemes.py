@@ -1,4 +1,4 @@
-"""MW and the dichotomy on the 1D CSPH window, through the pipeline stages (``pipeline_sph``).
+"""MW and the dichotomy on the 1D CSPH window, through the stages (``hugomap.stages``).
 
 Set-up: 1D copper without strength (LASL Mie–Grüneisen, 200 particles of 10 µm), u_p =
 1000 m/s, loaded until the front has crossed 45 % of the sample; the window (100 dx, front at

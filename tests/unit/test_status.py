@@ -71,7 +71,7 @@ def sweep(tmp_path: Path) -> tuple[Path, Path]:
     os.utime(part, (NOW - 300, NOW - 300))
     # loaded, the piston run not yet checkpointed
     _checkpoint(sc / "up2.5/loaded.nc", stage="loaded", status="ok")
-    # failed while loading (pipeline._failure: attributes only)
+    # failed while loading (stages.files.failure: attributes only)
     write_netcdf(
         xr.Dataset(attrs={"stage": "loaded", "status": "atom_lost", "diagnostic": "atom 3 left"}),
         sc / "up3/loaded.nc",

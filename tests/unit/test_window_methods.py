@@ -89,7 +89,7 @@ def test_dichotomy_root_and_bracket_signs():
         trials = []
         for u in state["pending"]:
             f = base.copy()  # every trial restarts from the same checkpoint
-            f.galilean_shift(u - f.u_out)  # as the pipeline's trials: u_p held
+            f.galilean_shift(u - f.u_out)  # as the dichotomy stage's trials: u_p held
             r = fixed_run(f, _signal(f), duration=4.0, every=EVERY)
             assert r["status"] == "ok"
             errs.append(r["slope_err"])

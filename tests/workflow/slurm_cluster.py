@@ -10,7 +10,7 @@ bind-mounted on /etc/slurm; its jobs inherit that view, nothing else sees it. Wh
 mount namespace cannot be made, /etc/slurm/slurm.conf is written if absent and removed by
 ``stop()``.
 
-Recipe (../shared/FACTS.md): ``SlurmUser=root``, ``proctrack/linuxproc``, ``task/none``,
+Recipe: ``SlurmUser=root``, ``proctrack/linuxproc``, ``task/none``,
 ``select/cons_tres``, no accounting, one node, one default partition; ``slurmctld -D`` and
 ``slurmd -D`` detached, wait until ``sinfo`` shows the node idle, stop them by pid.
 

@@ -1,4 +1,4 @@
-"""Aggregating thousands of point files in bounded memory (issue 7, item 2).
+"""Aggregating thousands of point files in bounded memory.
 
 ``N_POINTS`` (2000; ``HUGOMAP_SCALE_POINTS`` overrides) point files in the real format are
 aggregated by the workflow's own stage (``python -m hugomap aggregate``'s ``cli.main``, run in

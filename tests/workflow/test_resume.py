@@ -1,4 +1,4 @@
-"""Kill and resume (issue 7, item 3), on the tiny sweep with a hard kill: SIGKILL to the
+"""Kill and resume, on the tiny sweep with a hard kill: SIGKILL to the
 whole process group (Snakemake and every job it runs).
 
 1. A run that asks for one dichotomy point is killed in the middle of its loop (a trial of

@@ -1,4 +1,4 @@
-"""The tiny sweep through a real SLURM cluster (issue 7, part 1).
+"""The tiny sweep through a real SLURM cluster .
 
 A one-node cluster (munge + slurmctld + slurmd, tests/workflow/slurm_cluster.py) runs the
 tiny sweep through Snakemake's SLURM executor with the project's profile
@@ -31,7 +31,7 @@ from slurm_cluster import SlurmCluster, ensure_installed  # noqa: E402
 ROOT = Path(__file__).resolve().parents[2]
 TINY = ROOT / "tests" / "workflow" / "tiny" / "config.yaml"
 PROFILE = ROOT / "workflow" / "profiles" / "slurm"
-# Without accounting, the executor's default `sacct` polling hangs (../shared/FACTS.md):
+# Without accounting, the executor's default `sacct` polling hangs:
 # poll with squeue, which sees finished jobs for the cluster's MinJobAge (300 s >= 3 x 2 s).
 NO_ACCOUNTING = ("--slurm-no-account", "--slurm-status-command", "squeue",
                  "--slurm-init-seconds-before-status-checks", "2",
@@ -74,7 +74,7 @@ def snakemake(workdir: Path, *args: str, env: dict[str, str]) -> subprocess.Pope
     cmd = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--directory",
            str(workdir), "--configfile", str(config), *args]  # fmt: skip
     with open(workdir / "snakemake.out", "wb") as out:
-        # stdin closed: the executor must not wait on a terminal (FACTS.md)
+        # stdin closed: the executor must not wait on a terminal
         return subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=out,
                                 stderr=subprocess.STDOUT, env=env, cwd=workdir,
                                 start_new_session=True)  # fmt: skip

@@ -84,7 +84,7 @@ def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
 
 
 def _analysis_notebook_runs_on(results: Path) -> None:
-    """notebooks/hugoniot_analysis (issue 5, item 4) executed on the tiny sweep's results:
+    """notebooks/hugoniot_analysis executed on the tiny sweep's results:
     every cell runs, the fit table has a row per scheme and the reference, the figures are
     written. (The numbers of a 36-cell sample are not checked here: the fit itself is
     tested in tests/unit/test_hugoniot_fit.py.)"""

@@ -87,7 +87,7 @@ class MGSolid:
 
 
 COPPER = MGSolid(rho0=8930.0, c0=3940.0, s=1.49, gamma0=2.0)
-"""Copper, LASL Shock Hugoniot Data (1980) linear fit as given in the project's issue 4."""
+"""Copper, LASL Shock Hugoniot Data (1980) linear fit (the Cu table entry)."""
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ at ETA_MAX_FRACTION/s, and the solver stops a run whose density passes that cap
 (``max_density``).
 
 Copper (``COPPER``): ρ0 = 8930 kg/m³, c0 = 3940 m/s, s = 1.49, Γ0 = 2.0 — LASL Shock Hugoniot
-Data (S. P. Marsh, ed., University of California Press, 1980), as given in the project's issue 4.
+Data (S. P. Marsh, ed., University of California Press, 1980), Table entry for Cu.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Atomic file writes: a temporary file in the target's folder, then ``os.replace``.
 
 A killed job leaves either the old file or the new one, never half a file (a failed
-``to_netcdf`` can leave a partial file at its target path, see ../shared/FACTS.md).
+``to_netcdf`` can leave a partial file at its target path).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@
 
 All quantities are in Lennard-Jones reduced units (σ = ε = m = 1, τ = σ√(m/ε)). The shift
 makes U continuous at rc (forces are unchanged), so NVE energy is conserved; without it the
-total energy jumps by U(rc) whenever a pair crosses the cutoff (see ../shared/FACTS.md).
+total energy jumps by U(rc) whenever a pair crosses the cutoff.
 The potential (rc and the shift) defines the Hugoniot: every dataset records both.
 """
 

@@ -54,7 +54,7 @@ from .simulation import MDSimulation
 from .state import MDState
 
 # Default liquid pole (a supercritical fluid that stays fluid under compression, see
-# shared/FACTS.md "Choosing the Lennard-Jones pole") and compressions ρ/ρ0.
+# the liquid scene of config/config.yaml) and compressions ρ/ρ0.
 LIQUID_POLE = (0.80, 2.0)
 CRYSTAL_POLE = (1.05, 0.1)
 DEFAULT_COMPRESSIONS = np.round(np.linspace(1.05, 1.45, 8), 4)

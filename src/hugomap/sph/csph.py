@@ -1,7 +1,7 @@
 """CSPH kernels: per-particle state, wall ghosts, pair sums, time step, update (SI units).
 
 Equations: Parshikov & Medin, J. Comput. Phys. 180(1), 2002 (doi:10.1006/jcph.2002.7099), as
-written in the seed talk (../shared/seed/SEED-en.md), in 2D plane strain (1D: uniaxial strain,
+written in the source talk (Murzov et al., VANT 2025), in 2D plane strain (1D: uniaxial strain,
 y terms vanish). Stress σ = −P I + S (tension positive), S deviatoric; ∇_i W_ij = −W'_ij e_ij
 with e_ij = (r_j − r_i)/r_ij the unit vector from i to j and W' = dW/dr (r_ij, h_ij) ≤ 0
 (``kernel.dwdr``), h_ij = θ (l_i + l_j) (``kernel.pair_h``). Per pair, the acoustic Riemann
