@@ -12,7 +12,7 @@ repeat in rounds and the fastest of each is kept (the machine may be shared).
 
 For scale, the PySPH 1.0b2 reference (measured on this machine kind): its 2D
 elastic-plastic ``solid_mech.impact`` example, 16,258 particles, ran at 9.0e-6 s per
-particle-step on one thread of this machine kind (5.6e-6 on two); the issue's target is at
+particle-step on one thread of this machine kind (5.6e-6 on two); the project's target is at
 most 3e-6 on one core. The comparison is of scale only: different scene, scheme and code.
 
     python benchmarks/sph_csph.py                    # 1 and 2 threads, 2 rounds

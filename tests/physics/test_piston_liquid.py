@@ -11,7 +11,7 @@ References and tolerances:
   failed the bound at −2.3 % (CI run of 0d15548).
 - The equilibrium-MD Hugoniot (hugomap.md.reference: NVT states at which
   E − E0 = ½(P + P0)(V0 − V)) for the same potential (rc = 2.5 σ, shifted) and pole: a shocked
-  simple fluid is hydrostatic, so its P at the measured V must agree within 2 % (the issue's
+  simple fluid is hydrostatic, so its P at the measured V must agree within 2 % (the project's
   bound; the reference's own statistical error is about 0.5 %).
 """
 

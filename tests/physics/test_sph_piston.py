@@ -9,7 +9,7 @@ Shock speed (no strength). Reference: Us = c0 + s u_p, exact for this EOS (it is
 that Hugoniot). Measurement: front tracking — every 20 steps the Eulerian position where the
 particle velocity crosses u_p/2 (linear interpolation between the two particles that bracket
 it); Us is the least-squares slope of that position against time over the last 70 % of the
-run (the first 30 % holds the start-up transient). Tolerance 1 % (the issue's). Measured
+run (the first 30 % holds the start-up transient). Tolerance 1 % (the project's requirement). Measured
 errors (θ = 0.6, C = 0.3, gradient correction on): u_p = 100: +0.03 %, 500: −0.12 %, 1000:
 −0.39 %, 2000: −0.89 %; the error grows with u_p because the continuity density lags the real
 compression through a front a few particles wide (by 0.9 % of ρ at 2000 m/s). Without the
@@ -21,7 +21,7 @@ K = ρ0 c0² and ν = (3K − 2G)/(2(3K + G)) = 0.346: σ_HEL = 0.2544 GPa. (The
 at the HEL η ≈ 1.2e-3 and s η changes K by 0.4 %, inside the tolerance.) Measurement: when
 the elastic front has run 80 % of the sample, the plastic front is the last particle with
 −σ_xx above half its maximum, the elastic front the last above 1 % of it; the precursor is
-the median of −σ_xx over the middle third between them. Tolerance 5 % (the issue's); measured
+the median of −σ_xx over the middle third between them. Tolerance 5 % (the project's requirement); measured
 with the seed's strain rate −0.8 % (n = 2000; −0.4 % with n = 3000), with ``dev_mean``
 (mean-velocity strain rate for dS/dt) −0.2 % (n = 2000; −0.004 % with n = 3000).
 """
@@ -96,7 +96,7 @@ def test_shock_speed_on_linear_hugoniot(up):
 
 @pytest.mark.slow
 def test_same_shock_in_1d_and_2d():
-    """The issue's "model no more than the scene needs": a plane-strain strip (8 rows,
+    """The project's "model no more than the scene needs": a plane-strain strip (8 rows,
     periodic in y: the period must be at least twice the neighbour-list radius) gives the 1D
     shock speed within 1 % (measured: 0.014 %)."""
     us1 = shock_speed(1000.0, n=300)

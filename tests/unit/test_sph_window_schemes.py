@@ -8,7 +8,7 @@ lower the amplitude to the u_p that shock needs (about 930 m/s), the dichotomy's
 ~110 m/s from its start.
 
 Reference: D = c0 + s u_p, exact for the Mie–Grüneisen EOS referenced to that line (the
-model's own Hugoniot). Tolerance 1 %, the issue's for the CSPH solver: at this resolution
+model's own Hugoniot). Tolerance 1 %, the project's for the CSPH solver: at this resolution
 (dx = 10 µm) the piston itself gives D −0.39 % at 1000 m/s (config/copper.yaml sweep; the
 solver's density lags the compression over the smeared front), and a window point adds its
 statistical error L s_a (2–3 m/s, 0.05 %). MW's point is read against the line at its own

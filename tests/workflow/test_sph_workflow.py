@@ -2,7 +2,7 @@
 tiny_cu``: 300 particles of 10 µm, no strength, u_p = 1000 m/s, piston and AMW).
 
 Reference: D = c0 + s u_p = 5430 m/s, exact for the Mie–Grüneisen EOS referenced to that
-line; tolerance 1 % (the issue's), measured −0.4 % (piston) and −0.4 % (AMW). Also the
+line; tolerance 1 % (the project's requirement), measured −0.4 % (piston) and −0.4 % (AMW). Also the
 layout: the aggregate has dims scheme × u_p with SI units on every variable, the model's
 reference Hugoniot (ref_*), the snapshot of the piston run in extended XYZ.
 """
