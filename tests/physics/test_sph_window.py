@@ -6,7 +6,7 @@ than the reference front speed (D_guess = 0.97 (c0 + s u_p)). AMW (``window.meth
 β = 0.5, ω from the particle count normalised by the upstream and Hugoniot densities,
 averaging windows of L/Us, front-speed resolution 0.5 % of Us) shifts the frame until the
 front stops. Reference: Us = c0 + s u_p = 5430 m/s (exact for the EOS). Tolerance 1 %, the
-the project's; measured: AMW D = 5399.7 m/s (−0.56 %) after 5 windows, against the piston's
+project's; measured: AMW D = 5399.7 m/s (−0.56 %) after 5 windows, against the piston's
 front-tracked −0.39 % (the AMW stops once the slope is within its error, before the last
 under-relaxed steps).
 The window must also hold the shocked state behind the front: lab-frame velocity u_p within
