@@ -140,6 +140,40 @@ class ControlParams:
         )  # fmt: skip
 
 
+@dataclass(frozen=True)
+class SlabState:
+    """The neutral state of a slab of whole bins, in the backend's units: ``rho`` density
+    [σ⁻³ | kg m⁻³], ``u`` mass-mean x velocity in the simulation frame [σ/τ | m s⁻¹], ``P`` =
+    P_xx = −σ_xx, ``Pyy``, ``Pzz`` [ε σ⁻³ | Pa], ``E`` specific internal energy (the
+    kinetic part relative to the slab's mean velocity) [ε per atom | J kg⁻¹], ``T``
+    temperature [ε/k_B | K] (None where the backend has none), and ``extra`` fields of the
+    backend (CSPH: P_eos [Pa], eps_p [1]). Read like a mapping of the fields it has."""
+
+    rho: float
+    u: float
+    P: float
+    Pyy: float
+    Pzz: float
+    E: float
+    T: float | None = None
+    extra: tuple[tuple[str, float], ...] = ()
+
+    def keys(self) -> list[str]:
+        base = ["rho", "u", "P", "Pyy", "Pzz", "E"] + ([] if self.T is None else ["T"])
+        return base + [k for k, _ in self.extra]
+
+    def __iter__(self):
+        return iter(self.keys())
+
+    def __getitem__(self, k: str) -> float:
+        if k in ("rho", "u", "P", "Pyy", "Pzz", "E") or (k == "T" and self.T is not None):
+            return getattr(self, k)
+        for name, v in self.extra:
+            if name == k:
+                return v
+        raise KeyError(k)
+
+
 class Profile(Protocol):
     """A backend's reader of its raw profile sums (``solver.profile_sums(bin_width)``, bins
     from ``x0``): per-bin flow velocity and particle count, and the neutral state of a slab of
@@ -154,7 +188,5 @@ class Profile(Protocol):
     def velocity(self, sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(u, count) per bin: mass-mean x velocity and particles."""
 
-    def state(self, summed: np.ndarray, n_bins: int) -> dict[str, float]:
-        """Neutral state of ``n_bins`` bins whose sums were added into ``summed``: rho, u,
-        P (= P_xx), Pyy, Pzz, E (specific internal energy), T (NaN where the backend has no
-        temperature), and backend extras (CSPH: P_eos, eps_p)."""
+    def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
+        """Neutral state of ``n_bins`` bins whose sums were added into ``summed``."""

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..states import Pole, Profile
+from ..states import Pole, Profile, SlabState
 from .stats import CorrelatedSlope, block_average, robust_slope
 
 
@@ -72,7 +72,7 @@ def front_position(
 
 def slab_state(
     profile: Profile, sums: np.ndarray, edges: np.ndarray, x_lo: float, x_hi: float
-) -> dict[str, float] | None:
+) -> SlabState | None:
     """Neutral state of the bins lying wholly inside [x_lo, x_hi] (their sums added up
     first, then read by ``profile.state``); None if no bin is inside."""
     inside = (edges[:-1] >= x_lo) & (edges[1:] <= x_hi)
@@ -213,8 +213,8 @@ def measure_point(
     edges = bin_edges(profile, sums.shape[1] if sums.ndim == 3 else 0)
     min_len = MIN_SLAB_BINS * profile.bin_width - 1e-9 * profile.bin_width
     lg = gap if left_gap is None else left_gap
-    behind: list[dict | None] = []
-    ahead: list[dict | None] = []
+    behind: list[SlabState | None] = []
+    ahead: list[SlabState | None] = []
     for i in range(n):
         st = sa = None
         if np.isfinite(xf[i]):
@@ -228,7 +228,7 @@ def measure_point(
         ahead.append(sa)
     keys = next((list(s) for s in behind + ahead if s is not None), ["rho", "u", "P", "E"])
 
-    def series(states: list[dict | None], k: str) -> np.ndarray:
+    def series(states: list[SlabState | None], k: str) -> np.ndarray:
         return np.array([np.nan if s is None else s[k] for s in states], dtype=float)
 
     out: dict[str, float | str | bool] = {}

@@ -24,7 +24,7 @@ from ..analysis.shock import bin_edges, slab_state, track_front
 from ..analysis.stats import block_average
 from ..backend import WindowStart
 from ..io.dataset import lj_units
-from ..states import ControlParams, PistonFrame, Pole, Resources
+from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState
 
 log = logging.getLogger("hugomap")
 WALL_LAYER = 4.0  # sigma kept clear of a wall when measuring the pole (wall layering)
@@ -65,13 +65,13 @@ class MDProfile:
         with np.errstate(invalid="ignore", divide="ignore"):
             return sums[:, 1] / c, c
 
-    def state(self, summed: np.ndarray, n_bins: int) -> dict[str, float]:
+    def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
         from .profiles import fields_from_sums
 
         f = fields_from_sums(summed[None, :], self.area * self.bin_width * n_bins)
-        return {"rho": float(f["n"][0]), "u": float(f["ux"][0]), "P": float(f["Pxx"][0]),
-                "Pyy": float(f["Pyy"][0]), "Pzz": float(f["Pzz"][0]), "E": float(f["e"][0]),
-                "T": float(f["T"][0])}  # fmt: skip
+        return SlabState(rho=float(f["n"][0]), u=float(f["ux"][0]), P=float(f["Pxx"][0]),
+                         Pyy=float(f["Pyy"][0]), Pzz=float(f["Pzz"][0]), E=float(f["e"][0]),
+                         T=float(f["T"][0]))  # fmt: skip
 
 
 def _area(solver) -> float:

@@ -33,7 +33,7 @@ from ..backend import WindowStart
 from ..eos import EOS
 from ..failures import StageFailed
 from ..io.dataset import si_units
-from ..states import ControlParams, PistonFrame, Pole, Resources
+from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState
 from ..strength import Strength
 
 log = logging.getLogger("hugomap")
@@ -98,15 +98,14 @@ class SPHProfile:
         with np.errstate(invalid="ignore", divide="ignore"):
             return sums[:, 3] / sums[:, 1], sums[:, 0]
 
-    def state(self, summed: np.ndarray, n_bins: int) -> dict[str, float]:
+    def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
         s = summed
         m = s[1]
         vol = s[2] if self.depth is None else n_bins * self.bin_width * self.depth
         with np.errstate(invalid="ignore", divide="ignore"):
             Pxx, Peos, Pyy = -s[6] / vol, s[8] / vol, -s[7] / vol
-            return {"rho": m / vol, "u": s[3] / m, "P": Pxx, "Pyy": Pyy,
-                    "Pzz": 3.0 * Peos - Pxx - Pyy, "E": s[5] / m, "P_eos": Peos,
-                    "eps_p": s[9] / m}  # fmt: skip
+            return SlabState(rho=m / vol, u=s[3] / m, P=Pxx, Pyy=Pyy, Pzz=3.0 * Peos - Pxx - Pyy,
+                             E=s[5] / m, extra=(("P_eos", Peos), ("eps_p", s[9] / m)))  # fmt: skip
 
 
 def _depth(solver, info: dict) -> float | None:

@@ -18,7 +18,7 @@ import xarray as xr
 
 from ..backend import WindowStart
 from ..io.dataset import si_units
-from ..states import ControlParams, PistonFrame, Pole, Resources
+from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState
 from .model import FIELDS, PISTON, SyntheticPiston, SyntheticWindow, shocked_state
 
 log = logging.getLogger("hugomap")
@@ -40,13 +40,13 @@ class SyntheticProfile:
         with np.errstate(invalid="ignore", divide="ignore"):
             return sums[:, 2] / sums[:, 1], sums[:, 0]
 
-    def state(self, summed: np.ndarray, n_bins: int) -> dict[str, float]:
+    def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
         s = dict(zip(FIELDS, summed, strict=True))
         m, vol = s["mass"], s["volume"]
         with np.errstate(invalid="ignore", divide="ignore"):
             P = s["pressure_volume"] / vol
-            return {"rho": m / vol, "u": s["momentum"] / m, "P": P, "Pyy": P, "Pzz": P,
-                    "E": s["energy"] / m}  # fmt: skip
+            return SlabState(rho=m / vol, u=s["momentum"] / m, P=P, Pyy=P, Pzz=P,
+                             E=s["energy"] / m)  # fmt: skip
 
 
 class SyntheticBackend:
