@@ -13,27 +13,14 @@ layout and its cost model; what it hands back is neutral (``hugomap.states``): a
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
 import xarray as xr
 
 from .io.dataset import UnitTable
-from .states import ControlParams, PistonFrame, Pole, Profile, Resources
+from .states import ControlParams, PistonFrame, Pole, Profile, Resources, WindowStart
 from .window.protocol import ShockSolver, WindowSolver
-
-
-@dataclass(frozen=True)
-class WindowStart:
-    """What ``Backend.open_window`` returns: the settled window, the pole of its inflow
-    material, its ω signal (normalised by that pole and the shocked state), and attributes
-    to keep in the window checkpoint."""
-
-    window: WindowSolver
-    pole: Pole
-    signal: Any  # window.methods.OmegaSignal
-    attrs: dict[str, Any] = field(default_factory=dict)
 
 
 class Backend(Protocol):

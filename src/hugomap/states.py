@@ -1,15 +1,15 @@
 """The neutral records that cross the backend seam, in the backend's own units.
 
-A ``Pole`` (the initial state of a Hugoniot), a ``PistonFrame`` (how a piston run is
+A ``Pole`` (the initial state of a Hugoniot), a ``SlabState``, a ``PistonFrame`` (how a piston run is
 measured), ``ControlParams`` (a window point's times and gains), ``Resources`` (a job's cost)
-and the ``Profile`` protocol: a backend's reader of its raw profile sums into neutral fields
+a ``WindowStart`` (what opening a window gives) and the ``Profile`` protocol: a backend's reader of its raw profile sums into neutral fields
 ρ, u, P = P_xx, P_yy, P_zz, E, T. The analysis and the methods read these and nothing of a
 backend's own.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -190,3 +190,15 @@ class Profile(Protocol):
 
     def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
         """Neutral state of ``n_bins`` bins whose sums were added into ``summed``."""
+
+
+@dataclass(frozen=True)
+class WindowStart:
+    """What ``Backend.open_window`` returns: the settled window, the pole of its inflow
+    material, its ω signal (normalised by that pole and the shocked state), and attributes
+    to keep in the window checkpoint."""
+
+    window: Any  # window.protocol.WindowSolver
+    pole: Pole
+    signal: Any  # window.methods.OmegaSignal
+    attrs: dict[str, Any] = field(default_factory=dict)

@@ -22,9 +22,8 @@ import xarray as xr
 
 from ..analysis.shock import bin_edges, slab_state, track_front
 from ..analysis.stats import block_average
-from ..backend import WindowStart
 from ..io.dataset import lj_units
-from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState
+from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
 
 log = logging.getLogger("hugomap")
 WALL_LAYER = 4.0  # sigma kept clear of a wall when measuring the pole (wall layering)

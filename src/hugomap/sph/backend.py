@@ -29,11 +29,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..backend import WindowStart
 from ..eos import EOS
 from ..failures import StageFailed
 from ..io.dataset import si_units
-from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState
+from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
 from ..strength import Strength
 
 log = logging.getLogger("hugomap")

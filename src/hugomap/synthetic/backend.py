@@ -16,9 +16,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..backend import WindowStart
 from ..io.dataset import si_units
-from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState
+from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
 from .model import FIELDS, PISTON, SyntheticPiston, SyntheticWindow, shocked_state
 
 log = logging.getLogger("hugomap")
