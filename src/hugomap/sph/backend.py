@@ -425,11 +425,12 @@ class CSPHBackend:
 
 
 def _box(sim, info: dict) -> tuple[float, ...]:
-    """The snapshot's box [m]: x over the particles and the sample (a window's particles
-    lie beyond its edges), y the periodic width in 2D."""
-    x = sim.state.x[:, 0]
-    lo = float(min(x.min(), info["x_lo"])) if x.size else float(info["x_lo"])
-    hi = float(max(x.max(), info["x_hi"])) if x.size else float(info["x_hi"])
+    """The snapshot's box [m]: x over the particles and the sample's ends in ``info`` (a
+    window's particles lie beyond its edges), y the periodic width in 2D."""
+    x = np.concatenate([sim.state.x[:, 0], [info[k] for k in ("x_lo", "x_hi") if k in info]])
+    lo, hi = (float(x.min()), float(x.max())) if x.size else (0.0, 0.0)
+    if not hi > lo:
+        hi = lo + float(sim.state.l.max(initial=1e-6))
     if sim.state.dim == 1:
         return (lo, hi)
     return (lo, hi, float(sim.lo[1]), float(sim.lo[1] + sim.length[1]))
