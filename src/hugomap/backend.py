@@ -78,7 +78,16 @@ class Backend(Protocol):
         of its own, e.g. equilibrium MD); None when each scene computes its own."""
 
     def extras(self, solver: ShockSolver, out: Path, scene: dict, u_p: float, info: dict) -> None:
-        """Write a piston run's extras beside its point file (snapshots); may do nothing."""
+        """Write a piston run's extras beside its point file ``out`` (snapshots: the last
+        state as extended XYZ, ``io.extxyz``; a trajectory when the scene asks for one); may
+        do nothing."""
+
+    def window_extras(
+        self, window: WindowSolver, out: Path, scene: dict, u_p: float, scheme: str,
+        info: dict,
+    ) -> None:  # fmt: skip
+        """Write a window run's extras beside its point file ``out`` (``scheme``: amw, mw,
+        dichotomy), as ``extras``; may do nothing."""
 
     def cost(self, scene: dict, stage: str) -> Resources:
         """Resources of one job of ``stage`` (prepare, load, piston, reference, window)."""

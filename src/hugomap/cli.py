@@ -1,7 +1,12 @@
-"""Command line: ``python -m hugomap <stage> ...`` (what the Snakemake rules call).
+"""Command line: ``hugomap <command> ...`` (also ``python -m hugomap``).
 
-Every stage takes the scene's resolved config as JSON (``--scene-json``), so a job needs no
-other file than its inputs; ``check-config`` validates a YAML config and prints the problems.
+User commands check a config, follow a sweep, export an MD checkpoint to LAMMPS and draw
+figures; the workflow's stages are the commands the Snakemake rules call, each with the
+scene's resolved config as JSON (``--scene-json``), so a job needs no other file than its
+inputs. The stages keep their top-level names (``hugomap piston ...``) rather than moving
+under a ``stage`` verb: the rules' shell commands are part of what Snakemake records for
+every output, and changing them would make it rerun every finished point of an existing
+results folder. The help lists the two groups apart.
 """
 
 from __future__ import annotations
@@ -10,6 +15,13 @@ import argparse
 import json
 import logging
 import sys
+import textwrap
+
+USER_COMMANDS = ("check-config", "status", "export-lammps", "figures", "history")
+STAGE_COMMANDS = (
+    "prepare", "load", "piston", "reference", "window", "amw", "mw", "dichotomy-state",
+    "dichotomy-trial", "dichotomy-point", "aggregate", "campaign",
+)  # fmt: skip
 
 
 def _scene(args) -> dict:
@@ -20,11 +32,23 @@ def _scene(args) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit status."""
-    ap = argparse.ArgumentParser(prog="hugomap", description=__doc__)
-    sub = ap.add_subparsers(dest="cmd", required=True)
+    from . import __version__
+
+    ap = argparse.ArgumentParser(
+        prog="hugomap", usage="hugomap [-h] [--version] <command> ...",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Shock Hugoniots from LJ molecular dynamics and contact SPH.",
+    )  # fmt: skip
+    ap.add_argument("--version", action="version", version=f"hugomap {__version__}")
+    sub = ap.add_subparsers(dest="cmd", metavar="<command>", help=argparse.SUPPRESS)
+    helps: dict[str, str] = {}
+
+    def add(name: str, help: str) -> argparse.ArgumentParser:
+        helps[name] = help
+        return sub.add_parser(name, help=help, description=help)
 
     def stage(name: str, help: str):
-        p = sub.add_parser(name, help=help)
+        p = add(name, help)
         p.add_argument("--scene-json", required=True, help="resolved scene config (JSON)")
         p.add_argument("--scene-name", default="")
         p.add_argument("--out", required=True)
@@ -60,32 +84,28 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--u-p", type=float, required=True)
     p.add_argument("--state", required=True)
     p.add_argument("trials", nargs="*")
-    p = sub.add_parser("aggregate", help="join a scene's points into one dataset")
+    p = add("aggregate", help="join a scene's points into one dataset")
     p.add_argument("--config-json", required=True)
     p.add_argument("--scene-name", required=True)
     p.add_argument("--reference", default=None)
     p.add_argument("--out", required=True)
     p.add_argument("points", nargs="+")
-    p = sub.add_parser("figures", help="P-V and D-u_p figures of an aggregate")
+    p = add("figures", help="P-V and D-u_p figures of an aggregate")
     p.add_argument("aggregate")
     p.add_argument("--pv", required=True)
     p.add_argument("--dup", required=True)
-    p = sub.add_parser(
-        "campaign", help="join a campaign's aggregates; draw the chart and the stability map"
-    )
+    p = add("campaign", help="join a campaign's aggregates; draw the chart and the stability map")
     p.add_argument("--config-json", required=True, help="the config without its scenes")
     p.add_argument("--out", required=True, help="the campaign dataset (netCDF)")
     p.add_argument("--chart", required=True, help="speed-accuracy chart (PNG)")
     p.add_argument("--map", required=True, help="stability map (PNG)")
     p.add_argument("aggregates", nargs="+", help="results/hugoniot/<scene>.nc of its scenes")
-    p = sub.add_parser("history", help="history figure of one window point")
+    p = add("history", help="history figure of one window point")
     p.add_argument("point")
     p.add_argument("--out", required=True)
-    p = sub.add_parser("check-config", help="validate a YAML config")
+    p = add("check-config", help="validate a YAML config")
     p.add_argument("config")
-    p = sub.add_parser(
-        "status", help="a sweep's progress: points done, running, failed, pending per scene"
-    )
+    p = add("status", help="a sweep's progress: points done, running, failed, pending per scene")
     p.add_argument("--results", default="results", help="results folder (default: results)")
     p.add_argument(
         "--config",
@@ -94,7 +114,33 @@ def main(argv: list[str] | None = None) -> int:
         "found under --results)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable JSON output")
+    p = add(
+        "export-lammps",
+        "write an MD checkpoint (sample, loaded, partial piston, window) as a LAMMPS data "
+        "file (units lj, atom_style atomic; frozen atoms type 2)",
+    )
+    p.add_argument("checkpoint", help="an MD checkpoint (.nc)")
+    p.add_argument("out", help="the data file to write (e.g. sample.data)")
+    assert set(helps) == set(USER_COMMANDS) | set(STAGE_COMMANDS)
+    width = max(map(len, helps)) + 2
+
+    def group(title: str, names: tuple[str, ...]) -> str:
+        rows = [
+            textwrap.fill(helps[n], 88, initial_indent=f"  {n:<{width}}",
+                          subsequent_indent=" " * (width + 2))
+            for n in names
+        ]  # fmt: skip
+        return title + ":\n" + "\n".join(rows)
+
+    ap.epilog = "\n\n".join([
+        group("user commands", USER_COMMANDS),
+        group("workflow stages (called by the Snakemake rules)", STAGE_COMMANDS),
+        "'hugomap <command> --help' describes a command.",
+    ])  # fmt: skip
     args = ap.parse_args(argv)
+    if args.cmd is None:
+        ap.print_help()
+        return 0
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s")
 
     if args.cmd == "status":  # reads files only: no solver imports
@@ -106,6 +152,20 @@ def main(argv: list[str] | None = None) -> int:
         except ConfigError as exc:
             print(exc, file=sys.stderr)
             return 2
+
+    if args.cmd == "export-lammps":  # reads one checkpoint: no numba
+        from .failures import CheckpointError
+        from .io.checkpoint import MD_CHECKPOINT, read_checkpoint
+        from .md.lammps_data import LammpsDataError, checkpoint_to_data, write_data
+
+        try:
+            ds = read_checkpoint(args.checkpoint, kind=MD_CHECKPOINT)
+            out = write_data(args.out, checkpoint_to_data(ds))
+        except (CheckpointError, LammpsDataError, OSError) as exc:
+            print(f"export-lammps: {exc}", file=sys.stderr)
+            return 2
+        print(f"wrote {out} ({ds.sizes['atom']} atoms)")
+        return 0
 
     from . import stages
 

@@ -1,11 +1,13 @@
 """Snapshots: extended XYZ read back by a parser written to the extxyz spec (and by ASE when it
-is installed), and PNG pictures with plastic particles in green (hugomap.sph.snapshot).
+is installed), and PNG pictures with plastic particles in green (hugomap.sph.snapshot, the
+CSPH backend's extras).
 
 Reference for the format: the extxyz specification (github.com/libAtoms/extxyz; ASE's
 ``ase.io.extxyz``): a count line, a comment line of key=value pairs (values with spaces in double
 quotes) whose ``Properties`` key lists name:type:columns triplets, then one row per particle.
 Values are written with 17 significant digits, so float64 round-trips exactly; positions written
-in μm come back within a few ulp (one multiplication by 1e6 and one by 1e-6).
+in Å come back within a few ulp (one multiplication by 1e10 and one by 1e-10), velocities in
+Å/fs likewise (1e-5).
 """
 
 from __future__ import annotations
@@ -16,8 +18,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hugomap.io.extxyz import SnapshotError, write_extxyz
 from hugomap.sph.sample import porous_2d
-from hugomap.sph.snapshot import PLASTIC_GREEN, SnapshotError, write_extxyz, write_png
+from hugomap.sph.snapshot import PLASTIC_GREEN, sph_frame, write_png
 
 _KV = re.compile(r'([A-Za-z_][A-Za-z0-9_]*)=("[^"]*"|\S+)')
 _TYPES = {"S": str, "R": float, "I": int, "L": lambda v: v == "T"}
@@ -68,88 +71,122 @@ def _fields(n: int):
 
 def test_extxyz_round_trip_per_spec(tmp_path, sample):
     f = _fields(sample.n)
-    path = write_extxyz(
-        tmp_path / "snap.extxyz",
-        sample.x,
-        f,
-        sample.box,
-        {"scene": "cu-porous", "u_p": 100.0, "note": "two words", "step": 12, "window": True},
-        time=2.5e-9,
-        units={"pressure": "Pa", "v": "m/s"},
-        length_unit="m",
-        periodic=(False, True, False),
-    )
+    v = f.pop("v")
+    text = sph_frame(
+        sample.x, v, f, sample.box, masses=sample.m, mass_unit="kg/m", time=2.5e-9,
+        units={"pressure": "Pa"}, periodic=(False, True, False),
+        info={"scene": "cu-porous", "u_p": 100.0, "note": "two words", "step": 12,
+              "window": True},
+    )  # fmt: skip
+    path = write_extxyz(tmp_path / "snap.extxyz", text)
     ((info, arr),) = read_extxyz(path)
     assert len(arr["species"]) == sample.n and set(arr["species"]) == {"Cu"}
-    # Metres: positions and every float field back bit for bit; z padded with 0 for 2D.
-    assert np.array_equal(arr["pos"][:, :2], sample.x) and np.all(arr["pos"][:, 2] == 0.0)
-    for name in ("pressure", "plastic_strain", "id", "v", "boundary"):
+    # Å and Å/fs; z padded with 0 for 2D; momenta = masses × velo
+    np.testing.assert_allclose(arr["pos"][:, :2] * 1e-10, sample.x, rtol=4e-16, atol=0)
+    assert np.all(arr["pos"][:, 2] == 0.0) and np.all(arr["velo"][:, 2] == 0.0)
+    np.testing.assert_allclose(arr["velo"][:, :2] * 1e5, v, rtol=4e-16, atol=0)
+    np.testing.assert_allclose(arr["momenta"], arr["masses"][:, None] * arr["velo"], rtol=1e-15)
+    for name in ("pressure", "plastic_strain", "id", "boundary"):
         assert np.array_equal(arr[name], f[name]), name
     assert arr["id"].dtype.kind == "i" and arr["boundary"].dtype == bool
     lx, ly = sample.x_hi - sample.x_lo, sample.y_hi - sample.y_lo
     cell = np.array(info["Lattice"].split(), dtype=float).reshape(3, 3)
-    assert np.array_equal(np.diag(cell), [lx, ly, max(lx, ly)])
+    np.testing.assert_allclose(np.diag(cell) * 1e-10, [lx, ly, max(lx, ly)], rtol=4e-16)
     assert np.count_nonzero(cell - np.diag(np.diag(cell))) == 0
-    assert info["pbc"] == "F T F" and float(info["Time"]) == 2.5e-9
-    assert info["units"] == "pos:m pressure:Pa v:m/s" and info["length_unit"] == "m"
+    assert info["pbc"] == "F T F" and float(info["Time"]) == pytest.approx(2.5e6, rel=1e-15)
+    assert info["units"] == (
+        "pos:Angstrom velo:Angstrom/fs masses:kg/m momenta:kg/m*Angstrom/fs pressure:Pa"
+    )
+    assert info["length_unit"] == "Angstrom" and info["time_unit"] == "fs"
     assert info["note"] == "two words" and info["step"] == "12" and info["window"] == "T"
     assert list(tmp_path.iterdir()) == [path]  # no temporary file left behind
 
 
-def test_extxyz_micrometres_1d_and_trajectory(tmp_path):
+def test_extxyz_1d_radius_and_trajectory(tmp_path):
     x = np.array([[1e-6], [3e-6], [5.5e-6]])
     p = tmp_path / "line.xyz"
-    write_extxyz(p, x, {"rho": np.array([8930.0, 8931.0, 8932.5])}, (0.0, 6e-6), time=0.0)
+    write_extxyz(p, sph_frame(x, np.zeros(3), {"rho": np.array([8930.0, 8931.0, 8932.5])},
+                              (0.0, 6e-6)))  # fmt: skip
     r = tmp_path / "r.xyz"
-    write_extxyz(r, x, {}, (0.0, 6e-6), radius=np.full(3, 1e-6), units=None)
+    write_extxyz(r, sph_frame(x, np.zeros(3), {}, (0.0, 6e-6), radius=np.full(3, 1e-6)))
     ((ir, ar),) = read_extxyz(r)
-    np.testing.assert_allclose(ar["radius"], 1.0, rtol=1e-15)  # 1 μm written in μm
-    assert ir["units"] == "pos:um radius:um"
-    write_extxyz(
-        p,
-        x * 2,
-        {"rho": np.zeros(3)},
-        (0.0, 12e-6),
-        time=1e-9,
-        append=True,
-        species=["Cu", "Al", "Cu"],
-    )
+    np.testing.assert_allclose(ar["radius"], 1e4, rtol=1e-15)  # 1 μm written in Å
+    assert ir["units"].endswith("radius:Angstrom")
+    frame = sph_frame(x * 2, np.ones(3), {"rho": np.zeros(3)}, (0.0, 12e-6), time=1e-9,
+                      species=["Cu", "Al", "Cu"])  # fmt: skip
+    write_extxyz(p, frame, append=True)
     (i0, a0), (i1, a1) = read_extxyz(p)
-    assert i0["Properties"] == "species:S:1:pos:R:3:rho:R:1"
-    np.testing.assert_allclose(a0["pos"][:, 0] * 1e-6, x[:, 0], rtol=4e-16)
+    assert i0["Properties"] == "species:S:1:pos:R:3:velo:R:3:masses:R:1:momenta:R:3:rho:R:1"
+    np.testing.assert_allclose(a0["pos"][:, 0] * 1e-10, x[:, 0], rtol=4e-16)
     assert np.all(a0["pos"][:, 1:] == 0.0)  # 1D: y and z padded with zeros
-    np.testing.assert_allclose(np.diag(np.array(i0["Lattice"].split(), float).reshape(3, 3)), 6.0)
-    np.testing.assert_allclose(a1["pos"][:, 0] * 1e-6, 2 * x[:, 0], rtol=4e-16)
-    assert float(i1["Time"]) == 1e-9 and i0["length_unit"] == "um"
+    np.testing.assert_allclose(np.diag(np.array(i0["Lattice"].split(), float).reshape(3, 3)), 6e4)
+    np.testing.assert_allclose(a1["pos"][:, 0] * 1e-10, 2 * x[:, 0], rtol=4e-16)
+    assert float(i1["Time"]) == pytest.approx(1e6) and a1["velo"][0, 0] == pytest.approx(1e-5)
     assert list(a1["species"]) == ["Cu", "Al", "Cu"] and np.all(a1["rho"] == 0.0)
 
 
-def test_extxyz_read_by_ase_when_installed(tmp_path, sample):
+def test_extxyz_read_by_ase(tmp_path, sample):
     ase_io = pytest.importorskip("ase.io")
     f = _fields(sample.n)
-    path = write_extxyz(
-        tmp_path / "a.extxyz", sample.x, f, sample.box, time=1e-9, radius=sample.l / 2
-    )
-    atoms = ase_io.read(path, format="extxyz")
-    np.testing.assert_allclose(atoms.arrays["radius"] * 1e-6, sample.l / 2, rtol=4e-16)
-    np.testing.assert_allclose(atoms.positions[:, :2] * 1e-6, sample.x, rtol=4e-16, atol=0)
+    v = f.pop("v")
+    text = sph_frame(sample.x, v, f, sample.box, masses=sample.m, time=1e-9,
+                     radius=sample.l / 2, periodic=(False, True, False))  # fmt: skip
+    path = write_extxyz(tmp_path / "a.extxyz", [text, text])
+    frames = ase_io.read(path, index=":", format="extxyz")
+    assert len(frames) == 2
+    atoms = frames[0]
+    np.testing.assert_allclose(atoms.arrays["radius"] * 1e-10, sample.l / 2, rtol=4e-16)
+    np.testing.assert_allclose(atoms.positions[:, :2] * 1e-10, sample.x, rtol=4e-16, atol=0)
+    # velocities: ASE's get_velocities (momenta / masses) is the velo column, Å/fs
+    np.testing.assert_allclose(atoms.get_velocities()[:, :2] * 1e5, v, rtol=1e-15, atol=1e-20)
+    assert np.array_equal(atoms.get_masses(), sample.m)
     assert np.array_equal(atoms.arrays["pressure"], f["pressure"])
-    assert atoms.get_chemical_symbols()[0] == "Cu" and atoms.info["Time"] == 1e-9
+    assert atoms.arrays["boundary"].dtype == bool and list(atoms.pbc) == [False, True, False]
+    assert atoms.get_chemical_symbols()[0] == "Cu" and atoms.info["Time"] == pytest.approx(1e6)
+
+
+def test_csph_backend_snapshot_and_trajectory(tmp_path):
+    ase_io = pytest.importorskip("ase.io")
+    from hugomap.config import validate_config
+    from hugomap.sph.backend import BACKEND
+
+    sc = {"solver": "csph", "dim": 1, "schemes": ["piston"],
+          "sample": {"length": 6e-4, "dx": 1e-5},
+          "shock": {"u_p": [500.0], "snapshot_every": 2, "gap": 2e-5, "avg_length": 8e-5}}  # fmt: skip
+    scene = validate_config({"scenes": {"cu": sc}})["scenes"]["cu"]
+    scene["name"] = "cu"
+    sim, _, info = BACKEND.prepare(scene)
+    prof = BACKEND.profile(sim, scene, info)
+    BACKEND.start_piston(sim, scene, 500.0)  # (marks a loading run: no trajectory after)
+    assert not hasattr(BACKEND.profile(sim, scene, info), "_trajectory")
+    for _ in range(4):
+        sim.advance(3)
+        prof.sums(sim)
+    BACKEND.extras(sim, tmp_path / "piston.nc", scene, 500.0, info)
+    assert (tmp_path / "piston_snapshot.extxyz").exists()
+    frames = ase_io.read(tmp_path / "piston_trajectory.extxyz", index=":")
+    (last,) = ase_io.read(tmp_path / "piston_snapshot.extxyz", index=":")
+    assert len(frames) == 2 and last.info["run"] == "piston"
+    st = sim.state
+    np.testing.assert_allclose(last.positions[:, 0] * 1e-10, st.x[:, 0], rtol=4e-16)
+    np.testing.assert_allclose(last.get_velocities()[:, 0] * 1e5, st.v[:, 0], rtol=1e-14)
+    assert np.array_equal(last.arrays["plastic"], st.eps_p > 1e-4)
+    assert np.array_equal(last.arrays["P_xx"], -sim.stress_xx())
+    assert last.info["units"].startswith("pos:Angstrom velo:Angstrom/fs masses:kg/m^2")
 
 
 @pytest.mark.parametrize(
     ("fields", "words"),
     [
         ({"bad name": np.zeros(3)}, "field name"),
-        ({"pos": np.zeros(3)}, "field name"),
+        ({"velo": np.zeros(3)}, "field name"),
         ({"p": np.zeros(4)}, "shape"),
         ({"p": np.array(["a", "b", "c"])}, "dtype"),
     ],
 )
-def test_extxyz_bad_fields_are_refused(tmp_path, fields, words):
+def test_extxyz_bad_fields_are_refused(fields, words):
     with pytest.raises(SnapshotError, match=words):
-        write_extxyz(tmp_path / "x.xyz", np.zeros((3, 2)), fields, (0, 1, 0, 1))
-    assert not list(tmp_path.iterdir())
+        sph_frame(np.zeros((3, 2)), np.zeros((3, 2)), fields, (0, 1, 0, 1))
 
 
 def _rgb_fraction(png: Path, colour: str, tol: float = 0.02) -> float:

@@ -86,6 +86,72 @@ def _n_atoms(scene: dict) -> int:
     return 4 * nx * ny * nz  # FCC
 
 
+def md_frame(solver, scene: dict, tags: dict) -> str:
+    """An extended-XYZ frame of an MD run or window (``io.extxyz.format_frame``), in reduced
+    units as they are (lengths σ, velocities σ/τ, masses m = 1, time τ; the comment line
+    says so: ``length_unit=sigma time_unit=tau`` and ``units``), species ``Ar``.
+
+    Per atom: ``id`` (hugomap's label), ``frozen`` (ids < 0), and, relative to the atom's
+    profile bin (``shock.bin_width`` along x; its mean velocity u_b over the bin's mobile
+    atoms, all its atoms if it has none; V_b its volume, N_b its mobile atoms, at least 1):
+    ``P_xx`` = N_b/V_b [(v_x − u_b,x)² + W_xx] [ε σ⁻³] (W the atom's virial), whose mean
+    over a bin's mobile atoms is the profile's P_xx; ``e`` = ½|v − u_b|² + U [ε] (U its
+    potential energy; the bin mean is the profile's e); ``T`` = |v − u_b|²/3 [ε/k_B] (the
+    bin mean is N_b/(N_b − 1) times lower than the profile's T). The cell: y, z the periodic
+    box, x the walls and every atom."""
+    sim = getattr(solver, "sim", solver)  # an MDWindow holds its simulation
+    s = sim.state
+    pe, vir = sim.per_atom_energy_virial()
+    width = float(scene["shock"]["bin_width"])
+    mobile = s.ids >= 0
+    b = np.floor(s.x[:, 0] / width).astype(np.int64)
+    keys, inverse = np.unique(b, return_inverse=True)
+    m = len(keys)
+    count = np.bincount(inverse, weights=mobile.astype(float), minlength=m)
+    every = np.bincount(inverse, minlength=m).astype(float)
+    u = np.empty((m, 3))
+    for k in range(3):
+        vm = np.bincount(inverse, weights=s.v[:, k] * mobile, minlength=m)
+        va = np.bincount(inverse, weights=s.v[:, k], minlength=m)
+        u[:, k] = np.where(count > 0, vm / np.maximum(count, 1.0), va / every)
+    c = s.v - u[inverse]
+    density = np.maximum(count, 1.0)[inverse] / (_area(solver) * width)
+    fields = {
+        "id": s.ids.astype(np.int64),
+        "frozen": ~mobile,
+        "P_xx": density * (c[:, 0] ** 2 + vir[:, 0]),
+        "e": 0.5 * np.sum(c * c, axis=1) + pe,
+        "T": np.sum(c * c, axis=1) / 3.0,
+    }
+    xl, xr = sim.wall_positions()
+    xs = s.x[:, 0] if s.n else np.zeros(1)
+    x_lo = min(float(xs.min()), xl, xr, 0.0)
+    x_hi = max(float(xs.max()), xl, xr, x_lo + width)
+    from ..io.extxyz import format_frame
+
+    return format_frame(
+        s.x, np.array([x_hi - x_lo, s.L[1], s.L[2]]), velocities=s.v, masses=1.0,
+        fields=fields, species="Ar", origin=(x_lo, 0.0, 0.0), pbc=tuple(bool(p) for p in s.periodic),
+        time=float(s.time), length_unit="sigma", time_unit="tau",
+        units={"masses": "m", "momenta": "m*sigma/tau", "P_xx": "epsilon/sigma^3",
+               "e": "epsilon", "T": "epsilon/k_B"},
+        info={"scene": scene.get("name", ""), **tags, "step": int(s.step),
+              "potential": "LJ", "rc": float(sim.lj.rc)},
+    )  # fmt: skip
+
+
+def _snapshots(solver, out: Path, scene: dict, tags: dict) -> None:
+    """Write the run's trajectory (if one was taken) and its last frame beside ``out``."""
+    from ..io.extxyz import snapshot_paths, write_extxyz
+
+    snap, traj = snapshot_paths(out)
+    recorder = getattr(solver, "trajectory", None)
+    if recorder is not None:
+        recorder.save(traj)
+    if scene["shock"].get("snapshots", True):
+        write_extxyz(snap, md_frame(solver, scene, tags))
+
+
 class MDBackend:
     """``Backend`` for ``solver: md`` scenes (module docstring)."""
 
@@ -94,15 +160,16 @@ class MDBackend:
 
     # -- sample and checkpoints ------------------------------------------------------------
     def prepare(self, scene: dict) -> tuple[Any, Pole, dict[str, Any]]:
-        """FCC at (ρ0, T0) between two static walls, thermostatted (CSVR) for
+        """FCC at (ρ0, T0) (or the atoms of ``sample.data_file``, a LAMMPS data file) between
+        two static walls, thermostatted (CSVR) for
         ``equilibrate_time``, then run without thermostat for ``pole_time`` while the pole is
         measured away from the walls: ρ0, P0 = P_xx, E0, T0, P_yy0 (block averages with
         standard errors)."""
-        from .sample import fcc_state
+        from .sample import initial_state
         from .simulation import MDSimulation
 
         s = scene["sample"]
-        state = fcc_state(tuple(s["cells"]), s["rho0"], s["T0"], s["seed"], periodic_x=False)
+        state = initial_state(s)  # FCC, or the scene's LAMMPS data file
         sim = MDSimulation(
             state, lj(scene), s["dt"], T_bath=s["T0"], tau_bath=s["thermostat_tau"],
             seed=s["seed"],
@@ -155,6 +222,7 @@ class MDBackend:
         solver.T_bath = None
         solver.galilean_shift(-u_p - solver.mean_velocity())
         solver.set_walls(0.0, -u_p)
+        solver.loading = True  # no trajectory (``profile``): the loading stage ends in a checkpoint
 
     def piston_frame(self, solver, scene: dict, u_p: float, info: dict) -> PistonFrame:
         sh = scene["shock"]
@@ -166,7 +234,19 @@ class MDBackend:
         )  # fmt: skip
 
     def profile(self, solver, scene: dict, info: dict | None = None) -> MDProfile:
-        return MDProfile(_area(solver), scene["shock"]["bin_width"])
+        """The profile reader; with ``shock.snapshot_every`` = N it also takes a trajectory
+        frame (``md_frame``) every N samples (``io.extxyz.RecordingProfile``; not while
+        loading: ``start_piston`` marks the solver), which ``extras`` and ``window_extras``
+        write."""
+        prof = MDProfile(_area(solver), scene["shock"]["bin_width"])
+        every = scene["shock"].get("snapshot_every", 0)
+        if not every or getattr(solver, "loading", False):
+            return prof
+        from ..io.extxyz import RecordingProfile, Trajectory
+
+        solver.trajectory = getattr(solver, "trajectory", None) or Trajectory(every)
+        return RecordingProfile(prof, solver.trajectory,
+                                lambda s: md_frame(s, scene, {"run": "trajectory"}))  # fmt: skip
 
     # -- the window ------------------------------------------------------------------------
     def open_window(
@@ -250,7 +330,16 @@ class MDBackend:
         return ds
 
     def extras(self, solver, out: Path, scene: dict, u_p: float, info: dict) -> None:
-        """MD writes no snapshot yet."""
+        """A piston run's snapshot ``<stem>_snapshot.extxyz`` (``md_frame``) beside its point
+        file when ``shock.snapshots`` is set, and its trajectory ``<stem>_trajectory.extxyz``
+        when ``shock.snapshot_every`` is."""
+        _snapshots(solver, out, scene, {"run": "piston", "u_p": u_p})
+
+    def window_extras(
+        self, window, out: Path, scene: dict, u_p: float, scheme: str, info: dict
+    ) -> None:
+        """A window run's snapshot and trajectory, as ``extras``."""
+        _snapshots(window, out, scene, {"run": scheme, "u_p": u_p})
 
     # -- cost ------------------------------------------------------------------------------
     def _profile_bytes(self, scene: dict) -> float:

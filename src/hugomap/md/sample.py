@@ -1,14 +1,19 @@
-"""Initial samples: FCC lattices and Maxwell velocities (reduced LJ units).
+"""Initial samples: FCC lattices and Maxwell velocities, or a LAMMPS data file (reduced LJ
+units).
 
 FCC with lattice constant a = (4/ρ)^(1/3) [σ] for number density ρ [σ⁻³]: four atoms per
 cubic cell at (0,0,0), (½,½,0), (½,0,½), (0,½,½)·a, the whole lattice offset by a/4 so that no
-atom sits on a wall or on a periodic boundary.
+atom sits on a wall or on a periodic boundary. A data file (``sample.data_file``;
+``md.lammps_data``) gives the positions, velocities and box instead (``data_state``).
 """
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
+from .lammps_data import FROZEN, LammpsDataError, read_data
 from .state import MDState
 
 _BASIS = np.array([[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]])
@@ -48,3 +53,38 @@ def fcc_state(
         periodic=np.array([periodic_x, True, True]),
         walls0=np.array([0.0, 0.0, L[0], 0.0]),
     )
+
+
+def data_state(path: str | os.PathLike) -> MDState:
+    """A sample from a LAMMPS data file (``md.lammps_data.read_data``: positions [σ],
+    velocities [σ/τ], box): the box moved to start at the origin, y and z wrapped into
+    [0, L) (periodic), x closed by two static walls at 0 and L_x; hugomap ids = LAMMPS
+    ids − 1. Refused (``LammpsDataError``): frozen atoms (type 2: a sample has none) and
+    atoms outside the box along x (the walls would not hold them)."""
+    d = read_data(path)
+    if np.any(d.types == FROZEN):
+        raise LammpsDataError(
+            f"LAMMPS data file {path}: {int(np.sum(d.types == FROZEN))} atoms of type 2 "
+            "(frozen); a sample starts with mobile atoms only"
+        )
+    L = d.L
+    x = d.x - d.lo
+    if np.any(x[:, 0] < 0.0) or np.any(x[:, 0] > L[0]):
+        raise LammpsDataError(
+            f"LAMMPS data file {path}: atoms outside xlo xhi = {d.lo[0]!r} {d.hi[0]!r}; "
+            "the sample's x walls are the box's x bounds"
+        )
+    x[:, 1:] = np.mod(x[:, 1:], L[1:])
+    return MDState(
+        x=x, v=d.v.copy(), L=L, periodic=np.array([False, True, True]),
+        walls0=np.array([0.0, 0.0, L[0], 0.0]), ids=d.ids - 1,
+    )  # fmt: skip
+
+
+def initial_state(sample: dict) -> MDState:
+    """The scene's starting state: ``data_state(sample["data_file"])`` when it is set, else
+    ``fcc_state`` at (rho0, T0) with the scene's ``cells`` and ``seed`` between walls."""
+    if sample.get("data_file"):
+        return data_state(sample["data_file"])
+    return fcc_state(tuple(sample["cells"]), sample["rho0"], sample["T0"], sample["seed"],
+                     periodic_x=False)  # fmt: skip

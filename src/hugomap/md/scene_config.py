@@ -70,6 +70,8 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             f"be at least the cutoff potential.rc = {pot['rc']} thick; allowed range "
             f"[{pot['rc']}, 20.0] sigma"
         )
+    if smp.get("data_file"):
+        problems += _check_data_file(base, smp, L)
     seen: dict[str, int] = {}
     for i, u in enumerate(sh["u_p"]):
         tag = point_tag(u)
@@ -93,4 +95,34 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
                 f"{Lref:.3g} sigma, shorter than 2 (potential.rc + potential.skin) = "
                 f"{2 * rlist:.3g}; use more cells"
             )
+    return problems
+
+
+def _check_data_file(base: str, smp: dict, L: list[float]) -> list[str]:
+    """``sample.data_file``: a LAMMPS data file ``md.sample.data_state`` can start from
+    (readable, atom_style atomic, no frozen atoms), whose box is the one ``sample.cells``
+    and ``sample.rho0`` describe (L = cells·a, a = (4/ρ0)^(1/3), to 1e-6 relative) and
+    which holds 4·nx·ny·nz atoms (so ρ0 is its density): the cost model, the window's
+    inflow and the reference read these keys."""
+    from .sample import data_state
+
+    key = f"{base}.sample.data_file = {smp['data_file']!r}"
+    try:
+        st = data_state(smp["data_file"])
+    except ValueError as exc:  # LammpsDataError, and a missing or unreadable file
+        return [f"{key}: {exc}"]
+    problems = []
+    n = 4 * smp["cells"][0] * smp["cells"][1] * smp["cells"][2]
+    box = [float(v) for v in st.L]
+    if any(abs(b - e) > 1e-6 * e for b, e in zip(box, L, strict=True)):
+        problems.append(
+            f"{key}: its box {', '.join(f'{b:.8g}' for b in box)} sigma is not the one "
+            f"sample.cells = {smp['cells']} and sample.rho0 = {smp['rho0']} describe "
+            f"({', '.join(f'{e:.8g}' for e in L)} sigma); set them to the file's box"
+        )
+    if st.n != n:
+        problems.append(
+            f"{key}: {st.n} atoms; sample.cells = {smp['cells']} means {n} "
+            f"(4 nx ny nz, so that sample.rho0 is the file's density)"
+        )
     return problems

@@ -180,8 +180,10 @@ class CSPHBackend:
 
     # -- the piston ------------------------------------------------------------------------
     def start_piston(self, solver, scene: dict, u_p: float) -> None:
-        """Lab frame: the left wall (the piston) moves at u_p from now on."""
+        """Lab frame: the left wall (the piston) moves at u_p from now on. The solver is
+        marked ``loading`` (no trajectory: the loading stage ends in a checkpoint)."""
         solver.set_walls(u_p, 0.0)
+        solver.loading = True
 
     def piston_frame(self, solver, scene: dict, u_p: float, info: dict) -> PistonFrame:
         """Lab frame, upstream at rest; the front's travel counts from the sample's left
@@ -196,11 +198,24 @@ class CSPHBackend:
         )  # fmt: skip
 
     def profile(self, solver, scene: dict, info: dict) -> SPHProfile:
+        """The profile reader; with ``shock.snapshot_every`` = N it also takes a trajectory
+        frame every N samples (``io.extxyz.RecordingProfile``; not while loading, whose
+        state is a checkpoint: ``start_piston`` marks it), which ``extras`` and
+        ``window_extras`` write."""
         bw = scene["shock"]["bin_width"]
         if hasattr(solver, "geom"):
-            return SPHProfile(solver.geom.x_lo, bw, getattr(solver, "depth", None))
-        nb = int(np.ceil((info["x_hi"] - info["x_lo"]) / bw)) + 1
-        return SPHProfile(info["x_lo"], bw, _depth(solver, info), nb)
+            prof = SPHProfile(solver.geom.x_lo, bw, getattr(solver, "depth", None))
+        else:
+            nb = int(np.ceil((info["x_hi"] - info["x_lo"]) / bw)) + 1
+            prof = SPHProfile(info["x_lo"], bw, _depth(solver, info), nb)
+        every = scene["shock"].get("snapshot_every", 0)
+        if not every or getattr(solver, "loading", False):
+            return prof
+        from ..io.extxyz import RecordingProfile, Trajectory
+
+        solver.trajectory = getattr(solver, "trajectory", None) or Trajectory(every)
+        return RecordingProfile(prof, solver.trajectory,
+                                lambda s: _frame(s, scene, info, {"run": "trajectory"}))  # fmt: skip
 
     # -- the window ------------------------------------------------------------------------
     def open_window(
@@ -325,31 +340,40 @@ class CSPHBackend:
         return ds
 
     def extras(self, solver, out: Path, scene: dict, u_p: float, info: dict) -> None:
-        """Extended XYZ (OVITO/ASE) and, in 2D, a PNG with plastically deformed particles
-        green, beside the point file, when ``shock.snapshots`` is set."""
+        """A piston run's snapshots beside its point file: ``<stem>_snapshot.extxyz`` (the
+        last state; ``sph.snapshot.sph_frame``) and, in 2D, ``<stem>_snapshot.png``
+        (plastically deformed particles green) when ``shock.snapshots`` is set; the
+        trajectory ``<stem>_trajectory.extxyz`` when ``shock.snapshot_every`` is set."""
+        self._snapshots(solver, out, scene, info, {"run": "piston", "u_p": u_p}, png=True)
+
+    def window_extras(
+        self, window, out: Path, scene: dict, u_p: float, scheme: str, info: dict
+    ) -> None:
+        """A window run's snapshot (and trajectory) beside its point file, as ``extras``
+        (no PNG)."""
+        self._snapshots(window, out, scene, info, {"run": scheme, "u_p": u_p}, png=False)
+
+    def _snapshots(self, solver, out: Path, scene: dict, info: dict, tags: dict,
+                   png: bool) -> None:  # fmt: skip
+        from ..io.extxyz import snapshot_paths, write_extxyz
+
+        snap, traj = snapshot_paths(out)
+        recorder = getattr(solver, "trajectory", None)
+        if recorder is not None:
+            recorder.save(traj)
         if not scene["shock"]["snapshots"]:
             return
-        from .snapshot import write_extxyz, write_png
+        write_extxyz(snap, _frame(solver, scene, info, tags))
+        sim = getattr(solver, "sim", solver)
+        st = sim.state
+        if png and st.dim == 2:
+            from .snapshot import PLASTIC_THRESHOLD, write_png
 
-        st = solver.state
-        pressure = -solver.stress_xx()
-        box = (info["x_lo"], float(max(st.x[:, 0].max(), info["x_hi"])))
-        if st.dim == 2:
-            box = (*box, info["y_lo"], info["y_hi"])
-        stem = out.parent / "piston_snapshot"
-        write_extxyz(
-            stem.with_suffix(".extxyz"), st.x,
-            {"vel": st.v, "rho": st.rho, "e": st.e, "P_xx": pressure, "eps_p": st.eps_p},
-            box, {"scene": scene.get("name", ""), "u_p": u_p},
-            time=st.time, units={"vel": "m/s", "rho": "kg/m^3", "e": "J/kg", "P_xx": "Pa",
-                                 "eps_p": "1"},
-            periodic=(False, st.dim == 2, False), radius=0.5 * st.l,
-        )  # fmt: skip
-        if st.dim == 2:
             write_png(
-                stem.with_suffix(".png"), st.x, st.eps_p, 1e-4, pressure, field_label="P_xx",
-                box=box,
-                title=f"{scene.get('name', '')}: u_p = {u_p:g} m/s, t = {st.time * 1e6:.3f} µs",
+                snap.with_suffix(".png"), st.x, st.eps_p, PLASTIC_THRESHOLD, -sim.stress_xx(),
+                field_label="P_xx", box=_box(sim, info),
+                title=f"{scene.get('name', '')}: u_p = {tags['u_p']:g} m/s, "
+                f"t = {st.time * 1e6:.3f} µs",
             )  # fmt: skip
 
     # -- cost ------------------------------------------------------------------------------
@@ -398,6 +422,39 @@ class CSPHBackend:
         L = float(w.get("length", np.nan))
         return {"n_window": across * L / spacing, "window_spacings": L / spacing,
                 "spacing": spacing}  # fmt: skip
+
+
+def _box(sim, info: dict) -> tuple[float, ...]:
+    """The snapshot's box [m]: x over the particles and the sample's ends in ``info`` (a
+    window's particles lie beyond its edges), y the periodic width in 2D."""
+    x = np.concatenate([sim.state.x[:, 0], [info[k] for k in ("x_lo", "x_hi") if k in info]])
+    lo, hi = (float(x.min()), float(x.max())) if x.size else (0.0, 0.0)
+    if not hi > lo:
+        hi = lo + float(sim.state.l.max(initial=1e-6))
+    if sim.state.dim == 1:
+        return (lo, hi)
+    return (lo, hi, float(sim.lo[1]), float(sim.lo[1] + sim.length[1]))
+
+
+def _frame(solver, scene: dict, info: dict, tags: dict) -> str:
+    """An extended-XYZ frame of a CSPH run (``sph.snapshot.sph_frame``: Å, Å/fs, fs): velo,
+    ρ [kg/m³], e [J/kg], P_xx = −σ_xx [Pa], eps_p [-], ``plastic`` (eps_p >
+    ``PLASTIC_THRESHOLD``), ``frozen`` (boundary particles of a window), radius l/2."""
+    from .snapshot import PLASTIC_THRESHOLD, sph_frame
+
+    sim = getattr(solver, "sim", solver)
+    st = sim.state
+    frozen = getattr(sim, "frozen", None)
+    frozen = np.zeros(st.n, dtype=bool) if frozen is None else np.asarray(frozen, dtype=bool)
+    fields = {"rho": st.rho, "e": st.e, "P_xx": -sim.stress_xx(), "eps_p": st.eps_p,
+              "plastic": st.eps_p > PLASTIC_THRESHOLD, "frozen": frozen}  # fmt: skip
+    return sph_frame(
+        st.x, st.v, fields, _box(sim, info), masses=st.m,
+        mass_unit="kg/m" if st.dim == 2 else "kg/m^2", time=st.time,
+        units={"rho": "kg/m^3", "e": "J/kg", "P_xx": "Pa", "eps_p": "1"},
+        periodic=(False, bool(sim.periodic[1]), False), radius=0.5 * st.l,
+        info={"scene": scene.get("name", ""), **tags, "step": int(solver.steps)},
+    )  # fmt: skip
 
 
 def _inflow_tile(scene: dict, info: dict):

@@ -1,26 +1,13 @@
-"""Snapshots of CSPH particles: extended XYZ (OVITO, ASE) and PNG pictures.
+"""Snapshots of CSPH particles: extended XYZ frames (OVITO, ASE) and PNG pictures.
 
-Extended XYZ (the format of ASE's ``ase.io.extxyz`` and OVITO's XYZ reader; spec:
-https://github.com/libAtoms/extxyz): per frame, a count line, a comment line of key=value pairs,
-
-    Lattice="Lx 0 0 0 Ly 0 0 0 Lz" Origin="x_lo y_lo z_lo" pbc="F T F"
-    Properties=species:S:1:pos:R:3:<name>:R:1:... Time=<t> length_unit=um time_unit=s
-    units="pos:um pressure:Pa ..." <comment_attrs>
-
-then one line per particle: species, x, y, z, then the fields in the order of ``Properties``.
-Positions, ``Lattice``, ``Origin`` and the optional ``radius`` column are written in
-``length_unit`` (default μm). Not metres: OVITO's XYZ reader takes a file whose coordinates all lie
-within [−0.01, 1.01] for *reduced* cell coordinates and rescales them (OVITO source,
-``XYZImporter.cpp``), which would misplace a sub-metre sample written in metres; in μm SPH
-particles a few μm apart also get sizes of order one in a viewer. 2D (and 1D) positions are
-padded with z = 0 (and y = 0), and the missing cell lengths are ``depth`` (default: the largest
-box length, so the cell is never singular). ``Time`` is in seconds. Field values are written as
-given (SI unless the caller says otherwise in ``units``). Reals are written with 17 significant
-digits, so float64 values read back exactly. Writes are atomic (temporary file + rename).
-
-Column names OVITO maps to its standard properties (QUIP conventions): ``species`` → type,
-``pos``, ``velo`` → velocity, ``radius``, ``id`` → identifier, ``mass``, ``stress``; other
-numeric names become custom properties. ASE needs the species to be chemical symbols ("Cu").
+Extended XYZ (``sph_frame``): the one writer of ``hugomap.io.extxyz`` (its docstring gives
+the format and what ASE and OVITO make of each column), in the units those readers assume:
+positions, ``Lattice``, ``Origin`` and ``radius`` in Å (converted from metres), velocities
+``velo`` in Å/fs, ``Time`` in fs; ``masses`` is the particle's mass as the solver holds it
+(kg per metre of depth in 2D, per m² of cross-section in 1D; so ASE's ``momenta`` are in
+those units × Å/fs); the other fields are SI and say so in the ``units`` key. 2D (and 1D)
+positions are padded with z = 0 (and y = 0), and the missing cell lengths are ``depth``
+(default: the largest box length, so the cell is never singular).
 
 PNG (``write_png``): the 2D particles drawn as dots with axes in mm and equal aspect;
 plastically deformed particles (accumulated plastic strain > threshold) in green, as in the
@@ -33,103 +20,54 @@ from __future__ import annotations
 import io
 import math
 import os
-import re
-import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
-_LENGTH_UNITS = {"m": 1.0, "mm": 1e3, "um": 1e6, "nm": 1e9}
-_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-_RESERVED = {"species", "pos", "Lattice", "Properties", "Time", "Origin", "pbc"}
+from ..io.extxyz import (
+    ANGSTROM_PER_M,
+    FS_PER_S,
+    SnapshotError,
+    atomic_write_bytes,
+    format_frame,
+)
+
 PLASTIC_GREEN = "#1a9e1a"
 """Colour of plastically deformed particles (the source talk draws them green)."""
+PLASTIC_THRESHOLD = 1e-4
+"""Accumulated plastic strain above which a particle counts as plastic (flag and picture)."""
 
 
-class SnapshotError(ValueError):
-    """Bad snapshot input (shapes, names, units); the message names the argument."""
-
-
-def _atomic_write_bytes(path: Path, data: bytes) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.chmod(tmp, 0o644)  # mkstemp creates 0600; a snapshot is for sharing
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
-def _attr_value(key: str, value: object) -> str:
-    if isinstance(value, bool | np.bool_):
-        return "T" if value else "F"
-    if isinstance(value, int | np.integer):
-        return str(int(value))
-    if isinstance(value, float | np.floating):
-        return repr(float(value))
-    text = str(value)
-    if any(c in text for c in '"\n\r\\'):
-        raise SnapshotError(
-            f"comment_attrs[{key!r}] = {text!r} must not contain quotes, backslashes or line breaks"
-        )
-    return f'"{text}"' if (not text or any(c in text for c in " =,")) else text
-
-
-def _positions_3d(x: np.ndarray) -> np.ndarray:
-    x = np.asarray(x, dtype=np.float64)
-    if x.ndim == 1:
-        x = x[:, None]
-    if x.ndim != 2 or x.shape[1] not in (1, 2, 3):
-        raise SnapshotError(f"x has shape {x.shape}; expected (n, dim) with dim in 1, 2, 3")
-    out = np.zeros((x.shape[0], 3))
-    out[:, : x.shape[1]] = x
-    return out
-
-
-def write_extxyz(
-    path: str | os.PathLike,
+def sph_frame(
     x: np.ndarray,
+    v: np.ndarray,
     fields: Mapping[str, np.ndarray],
     box: Sequence[float],
-    comment_attrs: Mapping[str, object] | None = None,
     *,
+    masses: float | np.ndarray = 1.0,
+    mass_unit: str = "kg",
     time: float = 0.0,
     species: str | Sequence[str] = "Cu",
     units: Mapping[str, str] | None = None,
-    length_unit: str = "um",
     periodic: Sequence[bool] = (False, False, False),
     depth: float | None = None,
     radius: np.ndarray | None = None,
-    append: bool = False,
-) -> Path:
-    """Write one extended-XYZ frame (see the module doc) atomically; return the path.
+    info: Mapping[str, object] | None = None,
+) -> str:
+    """One extended-XYZ frame of SPH particles (module docstring) as text.
 
-    x (n, dim) [m]; fields: name → (n,) or (n, k) array (float → R, integer → I, bool → L);
-    box: (x_lo, x_hi) in 1D, (x_lo, x_hi, y_lo, y_hi) in 2D, six values in 3D [m];
-    comment_attrs: extra key=value pairs for the comment line (str, int, float, bool);
-    time [s]; species: one symbol for all or one per particle; units: field name → unit string,
-    written in the ``units`` key (pos gets ``length_unit``); length_unit: m, mm, um or nm;
-    periodic: pbc flags per axis; depth [m]: cell length along the padded axes; radius (n,) [m]:
-    written as the ``radius`` column in ``length_unit`` (OVITO draws particles with it; e.g.
-    half the particle size l); append: add the frame to an existing file (a trajectory), still
-    by writing a new file and renaming it.
+    x, v (n, dim) [m], [m/s]; fields: name → (n,) or (n, k) array, written as given (say
+    their units in ``units``); box: (x_lo, x_hi) in 1D, (x_lo, x_hi, y_lo, y_hi) in 2D, six
+    values in 3D [m]; masses (n,) or one value, in ``mass_unit``; time [s]; species: one
+    symbol or one per particle (ASE needs chemical symbols); periodic: three flags; depth [m]:
+    cell length along the padded axes; radius (n,) [m]: the ``radius`` column in Å (OVITO
+    draws particles with it, e.g. half the particle size l); info: more comment-line pairs.
     """
-    path = Path(path)
-    pos = _positions_3d(x)
-    n = pos.shape[0]
-    if length_unit not in _LENGTH_UNITS:
-        raise SnapshotError(f"length_unit = {length_unit!r} must be one of {list(_LENGTH_UNITS)}")
-    scale = _LENGTH_UNITS[length_unit]
     box = [float(b) for b in box]
     if len(box) not in (2, 4, 6) or not all(math.isfinite(b) for b in box):
         raise SnapshotError(f"box = {box!r} must hold 2, 4 or 6 finite numbers (lo, hi per axis)")
-    lo = np.zeros(3)
-    length = np.zeros(3)
+    lo, length = np.zeros(3), np.zeros(3)
     for k in range(len(box) // 2):
         lo[k], length[k] = box[2 * k], box[2 * k + 1] - box[2 * k]
     filled = length > 0
@@ -139,97 +77,31 @@ def write_extxyz(
     if not (math.isfinite(pad) and pad > 0):
         raise SnapshotError(f"depth = {depth!r} must be a finite length > 0 (metres)")
     length[~filled] = pad
-    if isinstance(species, str):
-        if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", species):
-            raise SnapshotError(f"species = {species!r} must be a name like 'Cu'")
-        spec = None
-    else:
-        spec = np.asarray(species, dtype=str)
-        if spec.shape != (n,) or not all(re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", s) for s in spec):
-            raise SnapshotError("species must be one name or n names like 'Cu'")
-    pbc = [bool(p) for p in periodic]
-    if len(pbc) != 3:
-        raise SnapshotError(f"periodic = {periodic!r} must hold three flags (x, y, z)")
-
-    props = ["species:S:1", "pos:R:3"]
-    columns: list[np.ndarray] = [pos * scale]
-    fmts: list[str] = ["%.17g"] * 3
-    unit_map = {"pos": length_unit}
+    cols = dict(fields)
+    unit_map = {"masses": mass_unit, "momenta": f"{mass_unit}*Angstrom/fs", **(units or {})}
     if radius is not None:
+        if "radius" in cols:
+            raise SnapshotError("radius is given both as an argument and as a field")
         rad = np.asarray(radius, dtype=np.float64).reshape(-1)
-        if rad.shape != (n,) or "radius" in fields:
-            raise SnapshotError(f"radius must have shape ({n},) and not also be a field")
-        props.append("radius:R:1")
-        columns.append(rad[:, None] * scale)
-        fmts.append("%.17g")
-        unit_map["radius"] = length_unit
-    for name, arr in fields.items():
-        if not _NAME.match(name) or name in _RESERVED:
-            raise SnapshotError(
-                f"field name {name!r} must match [A-Za-z_][A-Za-z0-9_]* and not be one of "
-                f"{sorted(_RESERVED)}"
-            )
-        a = np.asarray(arr)
-        if a.ndim == 1:
-            a = a[:, None]
-        if a.ndim != 2 or a.shape[0] != n:
-            raise SnapshotError(
-                f"field {name!r} has shape {np.shape(arr)}; expected ({n},) or ({n}, k)"
-            )
-        if a.dtype == bool:
-            code, fmt, a = "L", "%s", np.where(a, "T", "F")
-        elif np.issubdtype(a.dtype, np.integer):
-            code, fmt = "I", "%d"
-        elif np.issubdtype(a.dtype, np.floating):
-            code, fmt, a = "R", "%.17g", a.astype(np.float64)
-        else:
-            raise SnapshotError(f"field {name!r} has dtype {a.dtype}; expected float, int or bool")
-        props.append(f"{name}:{code}:{a.shape[1]}")
-        columns.append(a)
-        fmts += [fmt] * a.shape[1]
-
-    for name, unit in (units or {}).items():
-        if name not in fields:
-            raise SnapshotError(f"units names {name!r}, which is not a field")
-        if not re.fullmatch(r"[A-Za-z0-9_/^*.\-]+", unit):
-            raise SnapshotError(f"units[{name!r}] = {unit!r}: use a compact token such as Pa, m/s")
-        unit_map[name] = unit
-    cell = np.diag(length * scale)
-    header = {
-        "Lattice": '"' + " ".join(f"{v:.17g}" for v in cell.ravel()) + '"',
-        "Origin": '"' + " ".join(f"{v:.17g}" for v in lo * scale) + '"',
-        "pbc": '"' + " ".join("T" if p else "F" for p in pbc) + '"',
-        "Properties": ":".join(props),
-        "Time": repr(float(time)),
-        "length_unit": length_unit,
-        "time_unit": "s",
-        "units": '"' + " ".join(f"{k}:{v}" for k, v in unit_map.items()) + '"',
-    }
-    for key, value in (comment_attrs or {}).items():
-        if not _NAME.match(key) or key in header:
-            raise SnapshotError(
-                f"comment_attrs key {key!r} must be a name and not one of {sorted(header)}"
-            )
-        header[key] = _attr_value(key, value)
-
-    body = io.StringIO()
-    body.write(f"{n}\n")
-    body.write(" ".join(f"{k}={v}" for k, v in header.items()) + "\n")
-    if n:
-        table = np.empty((n, len(fmts)), dtype=object)
-        c = 0
-        for col in columns:
-            table[:, c : c + col.shape[1]] = col
-            c += col.shape[1]
-        row = " ".join(fmts)
-        if spec is None:
-            np.savetxt(body, table, fmt=f"{species} {row}")
-        else:
-            np.savetxt(body, np.column_stack([spec.astype(object), table]), fmt=f"%s {row}")
-    data = body.getvalue().encode()
-    if append and path.exists():
-        data = path.read_bytes() + data
-    return _atomic_write_bytes(path, data)
+        if rad.shape != (np.shape(x)[0],):
+            raise SnapshotError(f"radius must have shape ({np.shape(x)[0]},)")
+        cols["radius"] = rad * ANGSTROM_PER_M
+        unit_map["radius"] = "Angstrom"
+    return format_frame(
+        np.asarray(x, dtype=np.float64) * ANGSTROM_PER_M,
+        length * ANGSTROM_PER_M,
+        velocities=np.asarray(v, dtype=np.float64) * (ANGSTROM_PER_M / FS_PER_S),
+        masses=masses,
+        fields=cols,
+        species=species,
+        origin=lo * ANGSTROM_PER_M,
+        pbc=periodic,
+        time=float(time) * FS_PER_S,
+        length_unit="Angstrom",
+        time_unit="fs",
+        units=unit_map,
+        info=info,
+    )
 
 
 def write_png(
@@ -353,4 +225,4 @@ def write_png(
         sc.set_sizes([size])
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    return _atomic_write_bytes(path, buf.getvalue())
+    return atomic_write_bytes(path, buf.getvalue())

@@ -137,6 +137,11 @@ class SyntheticBackend:
     def extras(self, solver, out: Path, scene: dict, u_p: float, info: dict) -> None:
         """No snapshots: nothing to look at."""
 
+    def window_extras(
+        self, window, out: Path, scene: dict, u_p: float, scheme: str, info: dict
+    ) -> None:
+        """No snapshots: nothing to look at."""
+
     def cost(self, scene: dict, stage: str) -> Resources:
         return Resources(512, 1.0)
 
