@@ -32,7 +32,7 @@ def dichotomy_state(
     out: str | os.PathLike,
 ) -> Path:  # fmt: skip
     """Iteration k of the loop state: k = 0 proposes the bracket u_out0 ± half_width around
-    the window checkpoint's u_out (its ``frame_u_out``); k ≥ 1 folds in the trials run on iteration k − 1's
+    the window checkpoint's u_out; k ≥ 1 folds in the trials run on iteration k − 1's
     proposals (``dichotomy.update``)."""
     p = dich.params_from_config(scene["window"])
     if k == 0:
@@ -42,7 +42,8 @@ def dichotomy_state(
             s = dich.initial_state(float("nan"), p)
             s.update(done=True, status=status, reason=ds.attrs.get("diagnostic", ""), pending=[])
             return write_json(s, out)
-        return write_json(dich.initial_state(float(ds.attrs["frame_u_out"]), p), out)
+        u_out0 = backend_of(scene).load_window(ds, window0).u_out
+        return write_json(dich.initial_state(float(u_out0), p), out)
     prev = json.loads(Path(previous).read_text())
     new = [json.loads(Path(f).read_text()) for f in trials]
     return write_json(dich.update(prev, new, p), out)

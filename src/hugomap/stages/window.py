@@ -62,6 +62,5 @@ def window_start(
         **attrs, **start.attrs, "status": "ok", "D_guess": D_guess,
         "start_offset": w["start_offset"], "omega_signal": json.dumps(start.signal.to_json()),
         "pole": json.dumps(start.pole.as_dict()), "cost": json.dumps(cost),
-        "frame_u_in": win.u_in, "frame_u_out": win.u_out,
         INFO_ATTR: json.dumps(info),
     })  # fmt: skip
