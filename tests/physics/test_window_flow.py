@@ -21,13 +21,24 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hugomap.analysis.shock import region_state
+from hugomap.analysis.shock import bin_edges, slab_state
+from hugomap.md.backend import MDProfile
 from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation
 from hugomap.md.window import MDWindow, make_reservoir
 
 RHO0, T0, V = 0.8, 2.0, 6.0
+
+
+def region_state(sums, edges, lo, hi, area):
+    """The MD slab state of the bins inside [lo, hi] (``analysis.shock.slab_state`` on the MD
+    profile reader), under the MD field names n, T, ux."""
+    prof = MDProfile(area, float(edges[1] - edges[0]))
+    st = slab_state(prof, sums, bin_edges(prof, sums.shape[0]), lo, hi)
+    return {"n": st["rho"], "T": st["T"], "ux": st["u"]}
+
+
 LJ = LJParams(rc=2.5, shift=True, skin=0.3)
 DT = 0.002
 
