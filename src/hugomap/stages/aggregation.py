@@ -3,6 +3,7 @@ scheme × u_p), in the scene backend's units, with its reference beside them."""
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -26,7 +27,6 @@ def aggregate(
     """Points are grouped by the ``scheme`` attribute of their files (``scheme`` is the
     default for files without one), each group is joined along u_p, and the groups along
     scheme; a variable that one scheme's points never produced (all failed) is NaN there."""
-    units = backend_of(config["scenes"][scene]).units
     ref = None
     if reference:
         with xr.open_dataset(reference, engine="netcdf4") as r:
@@ -35,7 +35,10 @@ def aggregate(
     for p in points:
         with netCDF4.Dataset(p) as nc:
             name = getattr(nc, "scheme", scheme)
+            if not groups:  # every point carries its scene's config: the backend's units
+                sc = json.loads(getattr(nc, "scene_config", "{}"))
         groups.setdefault(str(name), []).append(p)
+    units = backend_of(config.get("scenes", {}).get(scene, sc)).units
     parts = [
         aggregate_points(ps, name, ref, config, scene, units).sortby("u_p")
         for name, ps in groups.items()
