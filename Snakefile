@@ -13,7 +13,7 @@ min_version("9.0")
 # default workflow profile only in profiles/default (beside this Snakefile, or in the working
 # directory), and a Snakefile cannot set those options itself: Snakemake 9 hands the workflow
 # its DAG and execution settings after this file is read. So a command-line run that names no
-# --workflow-profile starts itself again, once, with the same arguments and this profile
+# --workflow-profile starts itself again, once, with this profile and the same arguments
 # (anything Snakemake printed before it read this file may appear twice). With
 # `--workflow-profile none` Snakemake behaves as it does by default; a run through the Python
 # API, or a job Snakemake spawns, is left alone.
@@ -36,9 +36,9 @@ if (
             sys.executable,
             "-m",
             "snakemake",
-            *_argv[1:],
             "--workflow-profile",
             str(_profile),
+            *_argv[1:],
         ],
     )
 
