@@ -21,14 +21,25 @@ import os
 from snakemake_interface_executor_plugins.settings import ExecMode
 
 _argv = sys.argv
-_launch = os.getcwd() if workflow.overwrite_workdir is None else os.getenv("PWD")
+_launch = os.getcwd()
+if workflow.overwrite_workdir is not None:
+    # --directory: Snakemake has moved to it; the arguments' relative paths are relative to
+    # where it started (its WorkdirHandler.olddir); if that is not found, no restart
+    _launch = None
+    import inspect
+
+    for _frame in inspect.stack(0):
+        _handler = getattr(_frame.frame.f_locals.get("self"), "_workdir_handler", None)
+        if getattr(_handler, "olddir", None) is not None:
+            _launch = str(_handler.olddir)
+            break
 if (
     (Path(_argv[0]).name == "snakemake" or _argv[0].endswith("snakemake/__main__.py"))
     and not any(a.split("=")[0] == "--workflow-profile" for a in _argv)
     and workflow.exec_mode == ExecMode.DEFAULT
     and _launch
 ):
-    os.chdir(_launch)  # --directory: back to where it started, for relative paths
+    os.chdir(_launch)
     _profile = Path(workflow.basedir) / "workflow" / "profiles" / "default"
     os.execv(
         sys.executable,
