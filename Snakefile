@@ -7,6 +7,52 @@ from snakemake.utils import min_version
 
 min_version("9.0")
 
+
+# The workflow profile (workflow/profiles/default: rerun-incomplete, nolock: a killed sweep
+# resumes with the same command) for a plain `snakemake --cores 2` too. Snakemake looks for a
+# default workflow profile only in profiles/default (beside this Snakefile, or in the working
+# directory), and a Snakefile cannot set those options itself: Snakemake 9 hands the workflow
+# its DAG and execution settings after this file is read. So a command-line run that names no
+# --workflow-profile starts itself again, once, with this profile and the same arguments
+# (anything Snakemake printed before it read this file may appear twice). With
+# `--workflow-profile none` Snakemake behaves as it does by default; a run through the Python
+# API, or a job Snakemake spawns, is left alone.
+import os
+from snakemake_interface_executor_plugins.settings import ExecMode
+
+_argv = sys.argv
+_launch = os.getcwd()
+if workflow.overwrite_workdir is not None:
+    # --directory: Snakemake has moved to it; the arguments' relative paths are relative to
+    # where it started (its WorkdirHandler.olddir); if that is not found, no restart
+    _launch = None
+    import inspect
+
+    for _frame in inspect.stack(0):
+        _handler = getattr(_frame.frame.f_locals.get("self"), "_workdir_handler", None)
+        if getattr(_handler, "olddir", None) is not None:
+            _launch = str(_handler.olddir)
+            break
+if (
+    (Path(_argv[0]).name == "snakemake" or _argv[0].endswith("snakemake/__main__.py"))
+    and not any(a.split("=")[0] == "--workflow-profile" for a in _argv)
+    and workflow.exec_mode == ExecMode.DEFAULT
+    and _launch
+):
+    os.chdir(_launch)
+    _profile = Path(workflow.basedir) / "workflow" / "profiles" / "default"
+    os.execv(
+        sys.executable,
+        [
+            sys.executable,
+            "-m",
+            "snakemake",
+            "--workflow-profile",
+            str(_profile),
+            *_argv[1:],
+        ],
+    )
+
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
 from hugomap.config import ConfigError, load_schema, validate_config
 

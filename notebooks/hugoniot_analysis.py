@@ -107,21 +107,26 @@ fit_table
 
 # %%
 MARK = {"piston": "o", "amw": "s", "mw": "^", "dichotomy": "D", "reference": "."}
+COLOR = {"piston": "C0", "amw": "C1", "mw": "C2", "dichotomy": "C3"}  # a fit in its points' colour
 for name, ds in scenes.items():
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
     for scheme in ds["scheme"].values:
         p = ds.sel(scheme=scheme)
         use = np.isin(p["status"].values.astype(str), USABLE)
+        if not use.any():
+            continue  # nothing drawn: no legend entry
         u = p["u_p_set"].values if ("u_p_set" in p and scheme == "mw") else p["u_p"].values
-        m = MARK.get(str(scheme), "x")
+        m, c = MARK.get(str(scheme), "x"), COLOR.get(str(scheme), "C4")
         ax1.errorbar(u[use], p["D"].values[use], yerr=p["D_err"].values[use], fmt=m,
-                     label=str(scheme), capsize=2)  # fmt: skip
+                     color=c, label=str(scheme), capsize=2)  # fmt: skip
         ax2.errorbar(p["V"].values[use], p["P"].values[use], yerr=p["P_err"].values[use],
-                     fmt=m, label=str(scheme), capsize=2)  # fmt: skip
+                     fmt=m, color=c, label=str(scheme), capsize=2)  # fmt: skip
         row = fit_table[(fit_table.scene == name) & (fit_table.scheme == str(scheme))]
         if len(row) and np.isfinite(row["s"].iloc[0]):
-            uu = np.linspace(0.0, float(np.nanmax(ds["u_p"].values)) * 1.05, 50)
-            ax1.plot(uu, row["c0"].iloc[0] + row["s"].iloc[0] * uu, lw=0.8)
+            # over the u_p the fit was made on
+            uu = np.linspace(float(np.nanmin(u[use])), float(np.nanmax(u[use])), 50)
+            ax1.plot(uu, row["c0"].iloc[0] + row["s"].iloc[0] * uu, "--", color=c, lw=0.8,
+                     label=f"{scheme}: D = c0 + s u_p")  # fmt: skip
     if "ref_V" in ds and "ref_P" in ds:
         o = np.argsort(ds["ref_V"].values)
         ax2.plot(ds["ref_V"].values[o], ds["ref_P"].values[o], "k-", lw=1, label="reference")

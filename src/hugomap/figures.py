@@ -25,10 +25,44 @@ def _labels(ds: xr.Dataset, scene: str) -> dict:
     return backend(sc).figure_labels(sc)
 
 
+SCHEME_COLORS = {"piston": "C0", "amw": "C1", "mw": "C2", "dichotomy": "C3"}
+
+
+def _failed_text(u: np.ndarray, status: np.ndarray) -> str:
+    """``u_p 0.5 (oscillating), 3 (too_few_samples)``: where a scheme failed, and why."""
+    return "u_p " + ", ".join(f"{float(x):g} ({s})" for x, s in zip(u, status, strict=True))
+
+
+def _reference(ax, ds: xr.Dataset, rx: str, ry: str, fx: float, fy: float, label: str) -> None:
+    """The reference Hugoniot as a line, with a band of ±1 standard error where it has errors
+    (``ref_<y>_err``; the equilibrium-MD reference does, a model's own Hugoniot does not) and
+    x error bars where ``ref_<x>_err`` is non-zero."""
+    x, y = ds[rx].values, ds[ry].values
+    keep = np.isfinite(x) & np.isfinite(y)
+    order = np.argsort(x[keep])
+    x, y = x[keep][order] * fx, y[keep][order] * fy
+    ye = ds[ry + "_err"].values[keep][order] * fy if ry + "_err" in ds else None
+    band = ye is not None and np.isfinite(ye).any() and np.nanmax(ye) > 0
+    ax.plot(x, y, "k-", lw=1.2, label=label + (" ± 1 s.e." if band else ""))
+    if band:
+        ax.fill_between(x, y - ye, y + ye, color="k", alpha=0.15, lw=0)
+    if rx + "_err" in ds:
+        xe = ds[rx + "_err"].values[keep][order] * fx
+        if np.isfinite(xe).any() and np.nanmax(xe) > 0:
+            ax.errorbar(x, y, xerr=xe, fmt="none", ecolor="k", elinewidth=0.6, capsize=0)
+
+
 def hugoniot_figures(
     agg: str | os.PathLike, out_pv: str | os.PathLike, out_dup: str | os.PathLike
 ) -> None:
-    """Draw P(V) and D(u_p) for one scene's aggregate; failed points drawn hollow."""
+    """Draw P(V) and D(u_p) for one scene's aggregate, each scheme in its colour: converged
+    points filled, not-converged points hollow (both with their error bars), failed points
+    (no value) named with their status in the legend and, on D–u_p, marked × on the bottom
+    edge at their u_p. A scheme with nothing to draw has no legend entry. D–u_p is drawn at
+    the exact u_p (the piston's speed, or u_out − u_in set by a window); where u_p was also
+    measured behind the front, a thin bar at the point's D spans that measurement ± 1 s.e."""
+    from matplotlib.transforms import blended_transform_factory
+
     with xr.open_dataset(agg, engine="netcdf4") as ds:
         ds = ds.load()
     scene = ds.attrs.get("scene", "")
@@ -37,36 +71,56 @@ def hugoniot_figures(
     for out, (xv, yv) in ((out_pv, ("V", "P")), (out_dup, ("u_p_measured", "D"))):
         (xl, fx), (yl, fy) = axes[xv], axes[yv]
         fig, ax = plt.subplots(figsize=(5.5, 4.2), dpi=120)
-        for sch in ds["scheme"].values:
+        measured_bar = False
+        for i, sch in enumerate(ds["scheme"].values):
             d = ds.sel(scheme=sch)
-            ok = d["converged"].values.astype(bool)
+            color = SCHEME_COLORS.get(str(sch), f"C{4 + i}")
+            status = d["status"].values.astype(str)
             x, y = d[xv].values, d[yv].values
             xe, ye = d[xv + "_err"].values, d[yv + "_err"].values
             if xv == "u_p_measured":
                 # u_p is exact: the piston's speed (the u_p coordinate), or u_out − u_in set
                 # by a window; the measured jump is a check, a few % low from its slabs.
                 u_set = d["u_p_set"].values if "u_p_set" in d else np.full(x.shape, np.nan)
+                um, ume = x * fx, xe * fx
                 x = np.where(np.isfinite(u_set), u_set, d["u_p"].values)
                 xe = np.zeros_like(x)
             x, xe, y, ye = x * fx, xe * fx, y * fy, ye * fy
-            tag = text["tag"]
-            ax.errorbar(x[ok], y[ok], xerr=xe[ok], yerr=ye[ok], fmt="o", label=f"{sch} ({tag})")
-            if (~ok).any():
-                ax.plot(x[~ok], y[~ok], "o", mfc="none", mec="gray", label=f"{sch}, not converged")
+            drawn = np.isfinite(x) & np.isfinite(y)
+            ok = drawn & (status == "ok")
+            nc = drawn & (status == "not_converged")
+            failed = ~np.isin(status, ("ok", "not_converged", "", "nan"))
+            if ok.any():
+                ax.errorbar(x[ok], y[ok], xerr=xe[ok], yerr=ye[ok], fmt="o", color=color,
+                            label=f"{sch} ({text['tag']})")  # fmt: skip
+            if nc.any():
+                ax.errorbar(x[nc], y[nc], xerr=xe[nc], yerr=ye[nc], fmt="o", mfc="none",
+                            color=color, label=f"{sch}, not converged")  # fmt: skip
+            if xv == "u_p_measured":
+                m = (ok | nc) & np.isfinite(um) & np.isfinite(ume)
+                if m.any():
+                    ax.errorbar(um[m], y[m], xerr=ume[m], fmt="|", color=color, alpha=0.6,
+                                elinewidth=0.8, ms=6)  # fmt: skip
+                    measured_bar = True
+            if failed.any():
+                label = f"{sch} failed (no value): {_failed_text(d['u_p'].values[failed] * fx, status[failed])}"
+                if xv == "u_p_measured":
+                    tr = blended_transform_factory(ax.transData, ax.transAxes)
+                    ax.plot(x[failed], np.full(failed.sum(), 0.03), "x", color=color, ms=7,
+                            mew=1.5, transform=tr, clip_on=False, label=label)  # fmt: skip
+                else:
+                    ax.plot([], [], "x", color=color, ms=7, mew=1.5, label=label)
+        if measured_bar:
+            ax.errorbar([], [], xerr=[], fmt="|", color="grey", alpha=0.6,
+                        label="u_p measured behind the front ± 1 s.e.")  # fmt: skip
         rx = {"V": "ref_V", "u_p_measured": "ref_u_p"}[xv]
         ry = {"P": "ref_P", "D": "ref_D"}[yv]
         if rx in ds and ry in ds:
-            order = np.argsort(ds[rx].values)
-            ax.plot(
-                ds[rx].values[order] * fx,
-                ds[ry].values[order] * fy,
-                "k-",
-                lw=1.2,
-                label=text["reference"],
-            )
+            _reference(ax, ds, rx, ry, fx, fy, text["reference"])
             sx = {"V": "ref_snowplow_V", "u_p_measured": "ref_u_p"}[xv]
             sy = {"P": "ref_snowplow_P", "D": "ref_snowplow_D"}[yv]
             if sx in ds and sy in ds:
+                order = np.argsort(ds[rx].values)
                 ax.plot(ds[sx].values[order] * fx, ds[sy].values[order] * fy, "k--", lw=1.0,
                         label="snowplow limit")  # fmt: skip
         if xv == "V" and "rho0" in ds:
@@ -74,7 +128,7 @@ def hugoniot_figures(
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
         ax.set_title(f"{scene}: {text['title']}")
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7)
         fig.tight_layout()
         fig.savefig(out)
         plt.close(fig)

@@ -339,7 +339,7 @@ def sweep_status(
     if config is not None:
         top = config.get("schemes", ["piston"])
         scenes = {
-            name: (sc["shock"]["u_p"], list(sc.get("schemes", top)))
+            name: (sc["shock"]["u_p"], _schemes(sc.get("schemes", top)))
             for name, sc in config["scenes"].items()
         }
     else:
@@ -368,6 +368,59 @@ def sweep_status(
             for name, (ups, schemes) in scenes.items()
         ],
     }
+
+
+def _schemes(s: Any) -> list[str] | None:
+    return None if s is None else list(s)
+
+
+def _recorded(path: Path, key: str) -> dict | None:
+    """The JSON attribute ``key`` of a netCDF file, or None (no file, no attribute, not
+    readable)."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4", decode_times=False) as ds:
+            text = ds.attrs.get(key)
+        return json.loads(text) if isinstance(text, str) else None
+    except Exception:  # an unreadable file records nothing
+        return None
+
+
+def recorded_config(results: str | Path) -> tuple[dict | None, list[str]]:
+    """The config the results under ``results`` were made with, and the files it was read
+    from: each aggregate's ``config_json`` (``results/hugoniot/<scene>.nc``: the whole
+    resolved config), and for a scene without an aggregate the ``scene_config`` of its
+    prepared sample or of a file in its point folders (the scene alone: its schemes are then
+    its own ``schemes``, or those found on disk). A scene's newest record wins. None (and no
+    files) where nothing under ``results`` records a config."""
+    results = Path(results)
+    scenes: dict[str, tuple[float, dict, Any, Path]] = {}  # name: (mtime, scene, schemes, file)
+
+    def keep(name: str, mtime: float, scene: Any, schemes: Any, path: Path) -> None:
+        ok = isinstance(scene, dict) and isinstance(scene.get("shock", {}).get("u_p"), list)
+        if ok and (name not in scenes or mtime > scenes[name][0]):
+            scenes[name] = (mtime, scene, scene.get("schemes", schemes), path)
+
+    for agg in sorted((results / "hugoniot").glob("*.nc")):
+        cfg = _recorded(agg, "config_json")
+        if isinstance(cfg, dict) and isinstance(cfg.get("scenes"), dict):
+            sc = cfg["scenes"].get(agg.stem)
+            keep(agg.stem, agg.stat().st_mtime, sc, cfg.get("schemes"), agg)
+    for folder in sorted(results.iterdir()) if results.is_dir() else []:
+        if not folder.is_dir() or folder.name in RESERVED:
+            continue
+        candidates = [folder / "sample.nc", *sorted(folder.glob("up*/*.nc"))]
+        for f in (c for c in candidates if c.is_file()):
+            sc = _recorded(f, "scene_config")
+            if sc is not None:
+                if folder.name not in scenes:
+                    keep(folder.name, f.stat().st_mtime, sc, None, f)
+                break
+    if not scenes:
+        return None, []
+    config = {
+        "scenes": {name: {**sc, "schemes": schemes} for name, (_, sc, schemes, _) in scenes.items()}
+    }
+    return config, sorted({str(f) for (_, _, _, f) in scenes.values()})
 
 
 def _is_num(x: Any) -> bool:
@@ -490,17 +543,25 @@ def run_status(
 ) -> int:
     """What ``python -m hugomap status`` does: print the report; return the exit status.
 
-    ``config_path`` None: ``config/config.yaml`` if it exists, else the scenes on disk. A
-    config that does not validate raises ``ConfigError``.
+    ``config_path`` None: the config the results were made with (``recorded_config``: the
+    aggregates' ``config_json``, the scene files' ``scene_config``); where the results record
+    none (nothing has run yet), ``config/config.yaml`` if it exists; else the scenes on
+    disk. A config that does not validate raises ``ConfigError``.
     """
     import sys
 
     stream = stream or sys.stdout
-    if config_path is None and Path("config/config.yaml").exists():
-        config_path = "config/config.yaml"
-    config = load_config(config_path) if config_path is not None else None
+    config, source = None, None
+    if config_path is None:
+        config, files = recorded_config(results)
+        if config is not None:
+            source = "recorded in " + ", ".join(files)
+        elif Path("config/config.yaml").exists():
+            config_path = "config/config.yaml"
+    if config_path is not None:
+        config, source = load_config(config_path), str(config_path)
     report = sweep_status(results, config)
-    report["config"] = None if config_path is None else str(config_path)
+    report["config"] = source
     if as_json:
         stream.write(json.dumps(report, indent=2, allow_nan=False) + "\n")
     else:

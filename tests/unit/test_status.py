@@ -431,3 +431,37 @@ def test_every_failure_status_the_code_emits_is_registered():
     found.update(v for v in STATUS_NAMES.values() if v not in ("ok", "grow"))
     assert {"nan", "never_steady", "too_noisy", "bracket_not_found", "oscillating"} <= found
     assert found - {"ok"} <= set(FAILURES), found - set(FAILURES)
+
+
+def test_without_config_the_recorded_one_is_read(
+    sweep: tuple[Path, Path], capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """No --config: the config the results were made with, from the aggregate's
+    ``config_json`` (schemes and u_p of the sweep, not of config/config.yaml, which is there
+    in the working directory), else from a scene file's ``scene_config``."""
+    res, _ = sweep
+    monkeypatch.chdir(ROOT)  # config/config.yaml exists here: it must not be read
+    cfg = _config()
+    agg = xr.Dataset(attrs={"config_json": json.dumps(cfg), "scene": "tiny"})
+    write_netcdf(agg, res / "hugoniot" / "tiny.nc")
+    assert main(["status", "--results", str(res), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["config"] == f"recorded in {res / 'hugoniot' / 'tiny.nc'}"
+    (scene,) = report["scenes"]
+    assert scene["scene"] == "tiny" and scene["schemes"] == ["piston", "amw", "dichotomy"]
+    assert scene["counts"]["total"] == 30 and scene["counts"]["pending"] == 18
+    # No aggregate: the prepared sample's scene_config (its u_p; schemes from disk)
+    (res / "hugoniot" / "tiny.nc").unlink()
+    scene_cfg = dict(cfg["scenes"]["tiny"], name="tiny")
+    _checkpoint(res / "tiny" / "sample.nc", stage="sample", status="ok",
+                scene_config=json.dumps(scene_cfg))  # fmt: skip
+    assert main(["status", "--results", str(res)]) == 0
+    out = capsys.readouterr().out
+    assert f"(config recorded in {res / 'tiny' / 'sample.nc'})" in out.splitlines()[0]
+    assert "10 points (10 u_p x 1 schemes: piston)" in out
+    assert "not in config" in out and out.count("not in config") == 1  # up9 only
+    # Nothing recorded: config/config.yaml, as before
+    empty = res.parent / "empty"
+    empty.mkdir()
+    assert main(["status", "--results", str(empty), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["config"] == "config/config.yaml"

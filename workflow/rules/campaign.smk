@@ -7,7 +7,19 @@ rule campaign:
     input:
         campaign_aggregates,
     output:
-        **campaign_outputs(),
+        nc=campaign_outputs()["nc"],
+        chart=report(
+            campaign_outputs()["chart"],
+            caption="../report/speed_accuracy.rst",
+            category="Validation campaign",
+            labels={"figure": "speed against accuracy"},
+        ),
+        map=report(
+            campaign_outputs()["map"],
+            caption="../report/stability.rst",
+            category="Validation campaign",
+            labels={"figure": "stability map"},
+        ),
     log:
         f"{RES}/logs/campaign.log",
     conda:

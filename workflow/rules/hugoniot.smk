@@ -1,4 +1,8 @@
-# Aggregation across piston velocities and the figures.
+# Aggregation across piston velocities and the figures. The figures go into
+# `snakemake --report report.html` with their captions (workflow/report/).
+
+
+report: "../report/workflow.rst"
 
 
 rule aggregate:
@@ -27,8 +31,20 @@ rule figures:
     input:
         f"{RES}/hugoniot/{{scene}}.nc",
     output:
-        pv=f"{RES}/figures/{{scene}}_PV.png",
-        dup=f"{RES}/figures/{{scene}}_D_up.png",
+        pv=report(
+            f"{RES}/figures/{{scene}}_PV.png",
+            caption="../report/pv.rst",
+            category="Hugoniots",
+            subcategory="{scene}",
+            labels={"scene": "{scene}", "figure": "P-V"},
+        ),
+        dup=report(
+            f"{RES}/figures/{{scene}}_D_up.png",
+            caption="../report/d_up.rst",
+            category="Hugoniots",
+            subcategory="{scene}",
+            labels={"scene": "{scene}", "figure": "D-u_p"},
+        ),
     log:
         f"{RES}/logs/{{scene}}/figures.log",
     conda:
@@ -47,7 +63,13 @@ rule history_figure:
     input:
         f"{RES}/{{scene}}/up{{up}}/{{scheme}}.nc",
     output:
-        f"{RES}/figures/{{scene}}/up{{up}}_{{scheme}}_history.png",
+        report(
+            f"{RES}/figures/{{scene}}/up{{up}}_{{scheme}}_history.png",
+            caption="../report/history.rst",
+            category="Window control histories",
+            subcategory="{scene}",
+            labels={"scene": "{scene}", "u_p": "{up}", "scheme": "{scheme}"},
+        ),
     log:
         f"{RES}/logs/{{scene}}/up{{up}}/{{scheme}}_history.log",
     wildcard_constraints:

@@ -94,25 +94,85 @@ def _resume_partial(b, part: Path, loaded: xr.Dataset) -> tuple[xr.Dataset, obje
     return resumed
 
 
-def log_progress(sim, h: History, frame: PistonFrame, x_start: list, wall: float) -> None:
+def loading_rate(
+    h: History, cost: dict, wall_per_time: float | None = None
+) -> tuple[float, float] | None:
+    """How fast the loading stage went: (the speed at which the gap between the front and the
+    far end closed, from a line through the second half of its samples; the wall seconds per
+    unit of simulated time: the loading checkpoint's ``wall_per_time`` where it has one (its
+    samples after the first, without the first chunk's compile time), else its whole
+    ``cost`` over its simulated time), or None where it cannot tell (fewer than 4 samples
+    with a front, a gap that did not close, no wall time)."""
+    a = h.arrays()
+    m = (a["stage"] == 0) & np.isfinite(a["front"])
+    t, gap = a["t"][m], a["x_right"][m] - a["front"][m]
+    if t.size < 4:
+        return None
+    half = t.size // 2
+    speed = -float(np.polyfit(t[half:], gap[half:], 1)[0])
+    if wall_per_time is None or not wall_per_time > 0:
+        span = float(t[-1] - t[0]) * t.size / (t.size - 1)  # t.size sample intervals
+        wall_per_time = float(cost.get("wall_s", 0.0)) / span if span > 0 else 0.0
+    if not (speed > 0 and wall_per_time > 0):
+        return None
+    return speed, float(wall_per_time)
+
+
+def _gap(sim, h: History, frame: PistonFrame) -> tuple[float, float] | None:
+    """(front, what the front still has to close: the far end less ``rear_margin``)."""
+    xf = next((f for f in reversed(h.front) if np.isfinite(f)), float("nan"))
+    if not np.isfinite(xf):
+        return None
+    xr = frame.far_end if frame.far_end is not None else sim.wall_positions()[1]
+    return xf, xr - xf - frame.rear_margin
+
+
+def log_drive_start(
+    sim, h: History, frame: PistonFrame, rate: tuple[float, float] | None, x_start: list
+) -> None:
+    """The drive's first line: where the front is, what it has to go, and an ETA from the
+    loading stage's rate (``loading_rate``); sets ``x_start`` (the gap and wall time at the
+    start, for ``log_progress``)."""
+    g = _gap(sim, h, frame)
+    if g is None:
+        log.info("drive: step %d, t = %.6g, no front yet", sim.steps, sim.time)
+        return
+    xf, gap = g
+    x_start[0] = (gap, 0.0)
+    eta = "no ETA yet (the loading stage's rate is unknown)"
+    if rate is not None:
+        speed, wall_per_t = rate
+        eta = (f"ETA {max(gap, 0.0) / speed * wall_per_t:.0f} s from the loading stage (gap "
+               f"closing at {speed:.4g} per unit time, {wall_per_t:.3g} s of wall per unit time)")  # fmt: skip
+    log.info("drive: step %d, t = %.6g, front %.6g, %.6g to go, %s",
+             sim.steps, sim.time, xf, gap, eta)  # fmt: skip
+
+
+def log_progress(
+    sim, h: History, frame: PistonFrame, x_start: list, wall: float,
+    rate: tuple[float, float] | None = None,
+) -> None:  # fmt: skip
     """A progress line: step, simulated time, front, fraction of the drive done, ETA.
 
     The drive ends when the front is ``rear_margin`` from the far end; the fraction is how
     much of that gap (front to far end, both may move) has closed since the drive began
-    (``x_start[0]``: the gap and wall time then, set on the first call), the ETA that
-    fraction's wall rate; before any progress it says so rather than guess."""
-    xf = next((f for f in reversed(h.front) if np.isfinite(f)), float("nan"))
-    if not np.isfinite(xf):
+    (``x_start[0]``: the gap and wall time then, set by ``log_drive_start`` or on the first
+    call), the ETA that fraction's wall rate; before any progress, the loading stage's
+    ``rate`` (``loading_rate``) where it is known, else it says so rather than guess."""
+    g = _gap(sim, h, frame)
+    if g is None:
         return
-    xr = frame.far_end if frame.far_end is not None else sim.wall_positions()[1]
-    gap = xr - xf - frame.rear_margin  # what the front still has to close
+    xf, gap = g
     if x_start[0] is None:
         x_start[0] = (gap, wall)
     gap0, w0 = x_start[0]
     done = 1.0 - gap / gap0 if gap0 > 0 else 1.0
-    eta = (
-        f"ETA {(wall - w0) * (1.0 - done) / done:.0f} s" if done > 0 else "ETA after the next line"
-    )
+    if done > 0:
+        eta = f"ETA {(wall - w0) * (1.0 - done) / done:.0f} s"
+    elif rate is not None:
+        eta = f"ETA {max(gap, 0.0) / rate[0] * rate[1]:.0f} s (loading stage's rate)"
+    else:
+        eta = "ETA after the next line"
     log.info(
         "progress: step %d, t = %.6g, front %.6g, %.0f %% of the drive, %s",
         sim.steps, sim.time, xf, 100.0 * min(max(done, 0.0), 1.0), eta,
@@ -145,11 +205,15 @@ def piston_point(
     profile = b.profile(sim, scene, info)
     step0 = sim.steps
     n_since, x_start = [0], [None]
+    rate = loading_rate(history_of(ds), json.loads(ds.attrs.get("cost", "{}")),
+                        ds.attrs.get("wall_per_time"))  # fmt: skip
+    log_drive_start(sim, h, frame, rate, x_start)
 
     def checkpoint() -> None:
         n_since[0] += 1
         if n_since[0] % sh["checkpoint_every"] == 0:
-            log_progress(sim, h, frame, x_start, clock.cost()["wall_s"] - clock.prior["wall_s"])
+            wall = clock.cost()["wall_s"] - clock.prior["wall_s"]
+            log_progress(sim, h, frame, x_start, wall, rate)
             save_partial(b, sim, h, pole, clock.cost(sim.n_particles * (sim.steps - step0)),
                          ds, part)  # fmt: skip
 

@@ -116,11 +116,16 @@ def run_stage(
 
 
 def load_to_target(
-    solver: ShockSolver, frame: PistonFrame, profile: Profile, history: History
+    solver: ShockSolver,
+    frame: PistonFrame,
+    profile: Profile,
+    history: History,
+    on_sample: Callable[[], None] | None = None,
 ) -> None:
     """Loading stage: drive until the front is ``load_distance`` from the piston's start."""
     run_stage(solver, frame, profile, history, 0,
-              lambda xf, xl, xr: xf - frame.x_origin >= frame.load_distance)  # fmt: skip
+              lambda xf, xl, xr: xf - frame.x_origin >= frame.load_distance,
+              on_sample=on_sample)  # fmt: skip
 
 
 def drive(
