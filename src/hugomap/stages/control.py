@@ -11,7 +11,7 @@ from ..failures import HugomapFailure
 from ..registry import backend as backend_of
 from ..window.methods import amw, mw
 from ..window.steady import steady_state
-from .files import Clock, info_of
+from .files import Clock, info_of, write_extras
 from .windows import failed_point, open_window, prior_cost, window_point
 
 log = logging.getLogger("hugomap")
@@ -59,9 +59,6 @@ def control_point(
     except HugomapFailure as exc:
         status, diagnostic = exc.status, exc.diagnostic
     cost = clock.cost(win.n_particles * (win.steps - step0))
-    try:
-        b.window_extras(win, Path(out), scene, u_p, scheme, info_of(ds))
-    except (ValueError, OSError) as exc:  # an extra: keep the point
-        log.warning("snapshot not written: %s", exc)
+    write_extras(b.window_extras, win, Path(out), scene, u_p, scheme, info_of(ds))
     return window_point(out, b, scheme, scene, u_p, pole, win, values, cost, status, diagnostic,
                         h, profile, hist)  # fmt: skip

@@ -21,7 +21,7 @@ from ..registry import backend as backend_of
 from ..window import dichotomy as dich
 from ..window.methods import fixed_run
 from ..window.steady import steady_state
-from .files import Clock, info_of, open_dataset
+from .files import Clock, info_of, open_dataset, write_extras
 from .windows import failed_point, open_window, prior_cost, window_point
 
 log = logging.getLogger("hugomap")
@@ -122,9 +122,6 @@ def dichotomy_point(
     except HugomapFailure as exc:
         status, diagnostic = exc.status, exc.diagnostic
     cost = clock.cost(win.n_particles * (win.steps - step0))
-    try:
-        b.window_extras(win, Path(out), scene, u_p, scheme, info_of(ds))
-    except (ValueError, OSError) as exc:  # an extra: keep the point
-        log.warning("snapshot not written: %s", exc)
+    write_extras(b.window_extras, win, Path(out), scene, u_p, scheme, info_of(ds))
     return window_point(out, b, scheme, scene, u_p, pole, win, values, cost, status, diagnostic,
                         h, profile, extra=trial_vars)  # fmt: skip

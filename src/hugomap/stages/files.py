@@ -112,6 +112,15 @@ def write_point(
     return write_netcdf(ds, out)
 
 
+def write_extras(write, *args) -> None:
+    """Call a backend's snapshot writer (``extras``, ``window_extras``); a snapshot is an
+    extra: one that cannot be written is logged and the point is kept."""
+    try:
+        write(*args)
+    except (ValueError, OSError) as exc:
+        log.warning("snapshot not written: %s", exc)
+
+
 def nan_front(h: dict) -> float:
     xf = np.asarray(h["front"], dtype=float)
     return float(np.nanmedian(xf)) if np.isfinite(xf).any() else float("nan")

@@ -32,6 +32,7 @@ from .files import (
     is_ok,
     open_dataset,
     pole_vars,
+    write_extras,
     write_point,
 )
 
@@ -236,10 +237,7 @@ def piston_point(
         values.update(r)
         log.info("point: D = %.6g +- %.2g, u_p %.6g (measured %.6g), P = %.6g +- %.2g, %s",
                  r["D"], r["D_err"], u_p, r["u_p_measured"], r["P"], r["P_err"], status)  # fmt: skip
-    try:
-        b.extras(sim, Path(out), scene, u_p, info)
-    except (ValueError, OSError) as exc:  # an extra: keep the point
-        log.warning("snapshot not written: %s", exc)
+    write_extras(b.extras, sim, Path(out), scene, u_p, info)
     path = write_point(out, b, scene, scheme, values, pole.as_dict(),
                        {k: a[k] for k in ("t", "front", "stage")}, status, diagnostic)  # fmt: skip
     part.unlink(missing_ok=True)
