@@ -52,7 +52,7 @@ def front_position(
     f = clip((u − u_ahead)/(u_behind − u_ahead), 0, 1) and split where the fewest are
     misclassified, Σ_left (1 − f) + Σ_right f (a change-point with the known levels). Then:
     - a smooth profile (bin-to-bin scatter of f below ``SMOOTH_NOISE``, ``_roughness``:
-      CSPH, the synthetic model) gives its half-amplitude point,
+      CSPH, an exact model) gives its half-amplitude point,
       f = ½ interpolated linearly between the two bins at the split. It moves at D for any
       steady shape, however broad (the noisy rule's ±3-bin window clipped a broad weak
       front and drifted: copper at 100 m/s D 0.85 % low), and a partial precursor ahead (an
