@@ -1,5 +1,6 @@
 """Stage ``aggregate``: all points of a scene → ``results/hugoniot/<scene>.nc`` (dims
-scheme × u_p), in the scene backend's units, with its reference beside them."""
+scheme × u_p), in the scene backend's units, with its reference beside them, CF-1.11
+(``io.dataset.cf_dataset``; an MD scene with a ``units`` block also in SI: ``with_si``)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import numpy as np
 import xarray as xr
 
 from ..io.atomic import write_netcdf
-from ..io.dataset import aggregate_points
+from ..io.dataset import aggregate_points, with_si
 from ..registry import backend as backend_of
 
 
@@ -25,7 +26,8 @@ def aggregate(
 ) -> Path:
     """Points are grouped by the ``scheme`` attribute of their files (``scheme`` is the
     default for files without one), each group is joined along u_p, and the groups along
-    scheme; a variable that one scheme's points never produced (all failed) is NaN there."""
+    scheme; a variable that one scheme's points never produced (all failed) is NaN there.
+    A scene with a ``units`` block (MD) gets ``<name>_SI`` companions (``with_si``)."""
     units = backend_of(config["scenes"][scene]).units
     ref = None
     if reference:
@@ -49,4 +51,4 @@ def aggregate(
             parts[i] = parts[i].assign({k: (("scheme", "u_p"), fill, src.attrs)})
     ds = xr.concat(parts, dim="scheme", data_vars="minimal", coords="minimal", compat="override",
                    join="outer", combine_attrs="override")  # fmt: skip
-    return write_netcdf(ds.load(), out)
+    return write_netcdf(with_si(ds.load(), config["scenes"][scene]), out)
