@@ -20,8 +20,10 @@
 # xarray and dask, fits the linear Us–up Hugoniot D = c0 + s·u_p per scheme with its
 # uncertainties, overlays each scene's reference (LJ: the equilibrium-MD Hugoniot;
 # copper: the EOS or the porous model), and charts cost against error and where the
-# methods failed. Units are each dataset's own (`units` attributes): Lennard-Jones reduced
-# units for MD scenes, SI for CSPH scenes.
+# methods failed. Units are each dataset's own: SI for CSPH scenes (`units` attributes);
+# Lennard-Jones reduced units for MD scenes, which the files (CF-1.11) mark `units = "1"` with
+# the reduced unit in `reduced_units` (docs/datasets.md; an MD scene with a `units:` block
+# also carries SI copies `D_SI`, `P_SI`, ...).
 #
 # Run it after a sweep (`snakemake --cores 2 ...`) from the repository root; set
 # `HUGOMAP_RESULTS` to read another results folder (the test suite points it at the tiny
@@ -58,10 +60,16 @@ print(f"{len(files)} scene(s) in {RESULTS / 'hugoniot'}:", [f.stem for f in file
 # %%
 lazy = {f.stem: xr.open_dataset(f, chunks={}) for f in files}  # dask-backed
 scenes = {name: ds.compute() for name, ds in lazy.items()}  # small: read each file once
+
+
+def unit(var: xr.DataArray) -> str:
+    """A variable's unit for a label: its reduced LJ unit (MD) or its SI unit."""
+    return str(var.attrs.get("reduced_units", var.attrs.get("units", "")))
+
+
 for name, ds in scenes.items():
-    units = ds["D"].attrs.get("units", "")
     print(f"{name}: schemes {list(ds['scheme'].values)}, u_p {list(ds['u_p'].values)} "
-          f"[{ds['u_p'].attrs.get('units', units)}]")  # fmt: skip
+          f"[{unit(ds['u_p'])}]")  # fmt: skip
 
 USABLE = ("ok", "not_converged")
 
@@ -133,10 +141,10 @@ for name, ds in scenes.items():
     if "ref_u_p" in ds and "ref_D" in ds:
         o = np.argsort(ds["ref_u_p"].values)
         ax1.plot(ds["ref_u_p"].values[o], ds["ref_D"].values[o], "k-", lw=1, label="reference")
-    ax1.set_xlabel(f"u_p [{ds['u_p'].attrs.get('units', '')}]")
-    ax1.set_ylabel(f"D [{ds['D'].attrs.get('units', '')}]")
-    ax2.set_xlabel(f"V [{ds['V'].attrs.get('units', '')}]")
-    ax2.set_ylabel(f"P [{ds['P'].attrs.get('units', '')}]")
+    ax1.set_xlabel(f"u_p [{unit(ds['u_p'])}]")
+    ax1.set_ylabel(f"D [{unit(ds['D'])}]")
+    ax2.set_xlabel(f"V [{unit(ds['V'])}]")
+    ax2.set_ylabel(f"P [{unit(ds['P'])}]")
     ax1.legend(fontsize=8)
     ax1.set_title(name)
     fig.tight_layout()

@@ -210,7 +210,8 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
         ru, ref = _reference_curve(ds)
         cases.setdefault(v.case, {
             "c0": c0, "units": backend(scene).units.system,
-            "velocity_unit": str(ds["u_p"].attrs.get("units", "")),
+            "velocity_unit": str(ds["u_p"].attrs.get("reduced_units",
+                                                     ds["u_p"].attrs.get("units", ""))),
             "reference": _reference_name(ds),
         })  # fmt: skip
         st = cfg["campaign"]["cases"][v.case].get("stability")
@@ -272,6 +273,7 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
     out = out.set_coords(["case", "study", "variant", "scheme", "scene"])
     out = out.merge(settings(out))
     out.attrs.update(
+        Conventions="CF-1.11",  # written through io.dataset.cf_dataset
         title=f"hugomap validation campaign {campaign_name(cfg)}",
         campaign=campaign_name(cfg),
         cases=json.dumps(cases, sort_keys=True),

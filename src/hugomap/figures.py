@@ -134,20 +134,25 @@ def hugoniot_figures(
         plt.close(fig)
 
 
+def _unit(ds: xr.Dataset, name: str, default: str) -> str:
+    """A variable's unit for a label: its ``reduced_units`` (LJ: ``units`` is "1") or
+    ``units``."""
+    if name not in ds:
+        return default
+    attrs = ds[name].attrs
+    return str(attrs.get("reduced_units", attrs.get("units", default)))
+
+
 def window_history_figure(point: str | os.PathLike, out: str | os.PathLike) -> None:
     """History of one window point: ω(t), the slopes a_k, u_in/u_out and the D estimate
     −u_in + L a_k against time (AMW, MW); the trial sequence u_out → ⟨dω/dt⟩ (dichotomy)."""
     with xr.open_dataset(point, engine="netcdf4") as ds:
         ds = ds.load()
     title = f"{ds.attrs.get('scene', '')} {ds.attrs.get('scheme', '')}: {ds['status'].values}"
-    # units from the file (MD: τ, σ/τ; CSPH: s, m/s)
-    tu = (
-        {"tau": "τ", "s": "s"}.get(ds["omega_t"].attrs.get("units", "tau"), "τ")
-        if "omega_t" in ds
-        else "τ"
-    )
-    vu = {"sigma tau^-1": "σ/τ", "m s^-1": "m/s"}.get(
-        ds["control_u_in"].attrs.get("units", "") if "control_u_in" in ds else "", "σ/τ"
+    # units from the file (MD: units "1" with reduced_units τ, σ/τ; CSPH: s, m/s)
+    tu = {"tau": "τ", "s": "s"}.get(_unit(ds, "omega_t", "tau"), "τ")
+    vu = {"sigma tau^-1": "σ/τ", "m s-1": "m/s", "m s^-1": "m/s"}.get(
+        _unit(ds, "control_u_in", ""), "σ/τ"
     )
     fig, axes = plt.subplots(3, 1, figsize=(5.5, 7.5), dpi=110, sharex=False)
     if "omega_t" in ds:

@@ -93,10 +93,10 @@ def test_units_tables():
     assert md.point is POINT_VARS and md.axes["velocity"] == "sigma tau^-1"
     u = CSPHBackend().units
     point, pole, axes = u.point, u.pole, u.axes
-    assert point["D"][0] == "m s^-1" and point["P"][0] == "Pa" and point["rho"][0] == "kg m^-3"
-    assert point["V"][0] == "m^3 kg^-1" and point["E"][0] == "J kg^-1"
-    assert "mass density" in point["rho"][1] and pole["rho0"][0] == "kg m^-3"
-    assert point["P_eos"][0] == "Pa" and axes == {"velocity": "m s^-1", "time": "s", "length": "m"}
+    assert point["D"][0] == "m s-1" and point["P"][0] == "Pa" and point["rho"][0] == "kg m-3"
+    assert point["V"][0] == "m3 kg-1" and point["E"][0] == "J kg-1"
+    assert "mass density" in point["rho"][1] and pole["rho0"][0] == "kg m-3"
+    assert point["P_eos"][0] == "Pa" and axes == {"velocity": "m s-1", "time": "s", "length": "m"}
     assert not any("sigma" in u or "epsilon" in u for u, _ in (*point.values(), *pole.values()))
 
 

@@ -44,7 +44,7 @@ import pytest
 import xarray as xr
 
 from hugomap.io.atomic import write_netcdf
-from hugomap.io.dataset import POINT_VARS, POLE_VARS, lj_units, point_dataset
+from hugomap.io.dataset import POINT_VARS, POLE_VARS, STATUS_FLAGS, lj_units, point_dataset
 
 N_POINTS = int(os.environ.get("HUGOMAP_SCALE_POINTS", "2000"))
 N_HISTORY = 4000
@@ -139,7 +139,8 @@ print(json.dumps({"rc": rc, "s": time.perf_counter() - t, "before_kB": before,
 def test_aggregate_thousands_of_points_in_bounded_memory(points, tmp_path: Path) -> None:
     paths, u, kinds = points
     out = tmp_path / "hugoniot" / "scale.nc"
-    args = ["aggregate", "--scene-name", "scale", "--config-json", "{}", "--out", str(out)]
+    cfg = json.dumps({"scenes": {"scale": {"solver": "md"}}})  # the stage asks its backend
+    args = ["aggregate", "--scene-name", "scale", "--config-json", cfg, "--out", str(out)]
     (tmp_path / "args.json").write_text(json.dumps([*args, *map(str, paths)]))
     # hugomap.cli and hugomap.stages are imported before the baseline is taken.
     r = subprocess.run(
@@ -176,4 +177,6 @@ def test_aggregate_thousands_of_points_in_bounded_memory(points, tmp_path: Path)
     assert np.isnan(ds["D_err"].values[0][[k[1] == "cfl" for k in sorted_kinds]]).all()
     for k, v in POLE.items():  # the pole, although failed loads carry none
         assert float(ds[k]) == v
-    assert ds["P"].attrs["units"] == "epsilon sigma^-3"
+    # CF: LJ reduced units are "1" with the reduced unit beside them
+    assert ds["P"].attrs["units"] == "1" and ds["P"].attrs["reduced_units"] == "epsilon sigma^-3"
+    assert [STATUS_FLAGS[c] for c in ds["status_flag"].values[0]] == list(status)

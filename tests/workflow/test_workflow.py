@@ -18,6 +18,7 @@ import pytest
 import xarray as xr
 
 from hugomap.failures import FAILURES
+from hugomap.io.dataset import open_points
 
 ROOT = Path(__file__).resolve().parents[2]
 TINY = ROOT / "tests" / "workflow" / "tiny" / "config.yaml"
@@ -39,7 +40,7 @@ def test_dry_run_before_any_job(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
+def test_tiny_sweep_end_to_end(tmp_path: Path, cf_errors) -> None:
     r = snakemake(tmp_path)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
     agg = tmp_path / "results" / "hugoniot" / "tiny.nc"
@@ -77,6 +78,15 @@ def test_tiny_sweep_end_to_end(tmp_path: Path) -> None:
         assert len(list(d.glob("trial*.json"))) == len(last["trials"])
     for png in ("tiny_PV.png", "tiny_D_up.png"):
         assert (tmp_path / "results" / "figures" / png).stat().st_size > 10_000
+    # CF-1.11 (compliance-checker: 0 errors) on the real aggregate and a window point; the
+    # scene's point files (histories, window records of different lengths) open as one.
+    for f in (agg, tmp_path / "results" / "tiny" / "up1.5" / "dichotomy.nc"):
+        assert cf_errors(f) == [], f
+    points = sorted((tmp_path / "results" / "tiny").glob("up*/*.nc"))
+    points = [p for p in points if p.stem in ("piston", "amw", "mw", "dichotomy")]
+    assert len(points) == 8
+    with open_points(points) as ps:
+        assert ps.sizes["point"] == 8 and ps["status"].shape == (8,)
     # A second run has nothing to do: every stage is a file.
     r2 = snakemake(tmp_path, "-n")
     assert "Nothing to be done" in r2.stdout + r2.stderr

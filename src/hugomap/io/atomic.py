@@ -1,7 +1,11 @@
 """Atomic file writes: a temporary file in the target's folder, then ``os.replace``.
 
 A killed job leaves either the old file or the new one, never half a file (a failed
-``to_netcdf`` can leave a partial file at its target path).
+``to_netcdf`` can leave a partial file at its target path). The final file has the mode a
+plain ``open`` would give it, ``0o666 & ~umask`` (``mkstemp`` makes its temporary file
+``0o600``), so a group that shares a results folder with ``umask 002`` or ``027`` can read
+it. A dataset that declares CF conventions (``Conventions = "CF-…"``: point files,
+aggregates, campaign datasets) is written through ``io.dataset.cf_dataset``.
 """
 
 from __future__ import annotations
@@ -14,14 +18,40 @@ from pathlib import Path
 import xarray as xr
 
 
+def umask() -> int:
+    """The process's umask (read from /proc where it can be, so it is never changed; else
+    set and restored at once)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    old = os.umask(0o022)
+    os.umask(old)
+    return old
+
+
+def _mode() -> int:
+    return 0o666 & ~umask()
+
+
 def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write ``ds`` to ``path`` atomically (netCDF4 format); return the path."""
+    """Write ``ds`` to ``path`` atomically (netCDF4 format), mode ``0o666 & ~umask``; a
+    dataset whose ``Conventions`` attribute starts with ``CF-`` is written CF-encoded
+    (``io.dataset.cf_dataset``). Return the path."""
+    if str(ds.attrs.get("Conventions", "")).startswith("CF-"):
+        from .dataset import cf_dataset
+
+        ds = cf_dataset(ds)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
         ds.to_netcdf(tmp, engine="netcdf4")
+        os.chmod(tmp, _mode())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -30,13 +60,14 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
 
 
 def write_text(text: str, path: str | os.PathLike) -> Path:
-    """Write ``text`` to ``path`` atomically."""
+    """Write ``text`` to ``path`` atomically, mode ``0o666 & ~umask``."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "w") as fh:
             fh.write(text)
+            os.fchmod(fh.fileno(), _mode())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -45,5 +76,5 @@ def write_text(text: str, path: str | os.PathLike) -> Path:
 
 
 def write_json(obj: object, path: str | os.PathLike) -> Path:
-    """Write ``obj`` as indented JSON, atomically."""
+    """Write ``obj`` as indented JSON, atomically (mode ``0o666 & ~umask``)."""
     return write_text(json.dumps(obj, indent=2, sort_keys=True) + "\n", path)

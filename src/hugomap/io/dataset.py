@@ -1,16 +1,28 @@
 """netCDF layout of Hugoniot points and per-scene aggregates (the only place that knows it).
 
 A point file holds scalar variables (value and ``_err`` standard error) with ``units`` and
-``long_name``, the point's ``status`` and ``diagnostic``, its cost, and the front history.
-The aggregate ``results/hugoniot/<scene>.nc`` has dimensions ``scheme`` × ``u_p`` (the
-nominal piston velocity); the pole, the model and the resolved config travel with it.
+``long_name``, the point's ``status`` (and its code ``status_flag``) and ``diagnostic``, its
+cost, and the front history. The aggregate ``results/hugoniot/<scene>.nc`` has dimensions
+``scheme`` × ``u_p`` (the nominal piston velocity); the pole, the model and the resolved
+config travel with it.
+
+Every point file, aggregate and campaign dataset follows CF-1.11 (``cf_dataset``, applied by
+``io.atomic.write_netcdf`` to any dataset whose ``Conventions`` attribute names CF): units
+UDUNITS can read, LJ reduced quantities as ``units = "1"`` with their reduced unit in
+``reduced_units``, flags on ``converged`` and ``status_flag``, no ``_FillValue`` on
+coordinates, string labels stored as character arrays, and an index coordinate on every
+dimension that has none so that files of different lengths combine (``open_scenes``,
+``open_points``). docs/datasets.md describes the layout for users.
 """
 
 from __future__ import annotations
 
 import json
+import math
+import re
 import subprocess
-from collections.abc import Sequence
+import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,6 +31,7 @@ import numpy as np
 import xarray as xr
 
 from .. import __version__
+from ..failures import FAILURES
 from ..keys import config_hash
 
 P_UNIT = "epsilon sigma^-3"
@@ -69,12 +82,13 @@ ALWAYS_WITH_ERR = ("D", "u_p_measured", "rho", "V", "P", "E", "E_minus_E0",
                    "residual_mass", "residual_momentum", "residual_energy")  # fmt: skip
 
 # -- unit tables ---------------------------------------------------------------------------
-# The tables above are in Lennard-Jones reduced units; a backend in SI translates every unit
-# and reads "number density"/"per atom" as mass density/per unit mass, and adds the
-# variables only it has. A backend hands its table to the functions below.
+# The tables above are in Lennard-Jones reduced units (written to files as units = "1" with
+# the reduced unit in ``reduced_units``: ``cf_units``); a backend in SI translates every unit
+# (written the UDUNITS way) and reads "number density"/"per atom" as mass density/per unit
+# mass, and adds the variables only it has. A backend hands its table to the functions below.
 SI_UNITS = {
-    "sigma tau^-1": "m s^-1", "sigma^-3": "kg m^-3", "sigma^3": "m^3 kg^-1", P_UNIT: "Pa",
-    "epsilon k_B^-1": "K", "epsilon": "J kg^-1", "tau": "s", "sigma": "m", "tau^-1": "s^-1",
+    "sigma tau^-1": "m s-1", "sigma^-3": "kg m-3", "sigma^3": "m3 kg-1", P_UNIT: "Pa",
+    "epsilon k_B^-1": "K", "epsilon": "J kg-1", "tau": "s", "sigma": "m", "tau^-1": "s-1",
 }  # fmt: skip
 _SI_TEXT = (
     ("number density", "mass density"), ("(per atom, m = 1)", "(per unit mass)"),
@@ -119,7 +133,7 @@ def lj_units() -> UnitTable:
 
 def si_units(extra: dict[str, tuple[str, str]] | None = None) -> UnitTable:
     """SI units (m, s, kg, Pa, J/kg, K), with a backend's ``extra`` point variables."""
-    axes = {"velocity": "m s^-1", "time": "s", "length": "m"}
+    axes = {"velocity": "m s-1", "time": "s", "length": "m"}
     return UnitTable({**_si(POINT_VARS), **(extra or {})}, _si(POLE_VARS), _si(PROFILE_VARS),
                      axes, "SI (m, s, kg)")  # fmt: skip
 
@@ -169,6 +183,176 @@ def provenance_attrs(config: dict | None) -> dict[str, str]:
     }
 
 
+# -- CF-1.11 -------------------------------------------------------------------------------
+CONVENTIONS = "CF-1.11"
+REDUCED_ATTR = "reduced_units"
+LJ_SYMBOLS = frozenset({"sigma", "epsilon", "tau", "k_B"})
+UNITS_CONVENTION = (
+    "units are UDUNITS strings; a Lennard-Jones reduced quantity has units = '1' and names "
+    "its reduced unit in the attribute reduced_units (sigma, epsilon, m, "
+    "tau = sigma sqrt(m/epsilon), k_B = 1; per-atom V and E, number density rho)"
+)
+REFERENCES = (
+    "Murzov, Dyachkov, Vyskvarko, Galtsov and Levashov, Voprosy Atomnoi Nauki i Tekhniki "
+    "(VANT), ser. Mathematical modelling of physical processes, 2025, no. 1 (the moving-window "
+    "method and its control schemes)"
+)
+#: ``status_flag`` codes: index into this tuple (a status not listed is ``unregistered``).
+STATUS_FLAGS: tuple[str, ...] = ("ok", "not_converged", *FAILURES, "unregistered")
+CONVERGED_FLAGS = {"flag_values": np.array([0, 1], np.int8),
+                   "flag_meanings": "not_converged converged"}  # fmt: skip
+
+
+def cf_units(units: str) -> tuple[str, str | None]:
+    """(UDUNITS units, reduced unit or None) of a table's ``units`` string: an LJ reduced
+    unit (one naming sigma, epsilon, tau or k_B, e.g. ``"sigma tau^-1"``) becomes ``"1"``
+    and is returned as the reduced unit; any other is written the UDUNITS way
+    (``"m s^-1"`` → ``"m s-1"``)."""
+    text = str(units)
+    if any(re.sub(r"\^?-?\d+$", "", t) in LJ_SYMBOLS for t in text.split()):
+        return "1", text
+    return re.sub(r"\^(-?\d+)", r"\1", text), None
+
+
+def status_codes(status: np.ndarray) -> np.ndarray:
+    """``status_flag`` of status strings: their index in ``STATUS_FLAGS`` (int8)."""
+    index = {s: i for i, s in enumerate(STATUS_FLAGS)}
+    other = len(STATUS_FLAGS) - 1
+    arr = np.asarray(status, dtype=object)
+    return np.vectorize(lambda s: index.get(str(s), other), otypes=[np.int8])(arr)
+
+
+def cf_dataset(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` made CF-1.11 conformant (a shallow copy; ``io.atomic.write_netcdf`` calls it for
+    every dataset whose ``Conventions`` names CF, so variables added after ``point_dataset``
+    are covered too).
+
+    - ``units`` through ``cf_units``: LJ reduced → ``"1"`` plus ``reduced_units``.
+    - ``converged`` gets ``flag_values``/``flag_meanings``; a string ``status`` gets its
+      code ``status_flag`` (``STATUS_FLAGS``), the string kept for readers.
+    - every dimension without a coordinate gets an integer index coordinate (0, 1, …), so
+      files whose ``ref_point``/``sample``/``bin`` lengths differ combine by an outer join.
+    - coordinates are written without ``_FillValue``; a string dimension coordinate
+      (``scheme``) as a character array (CF labels; xarray reads it back as strings).
+    - global ``Conventions``, ``title``, ``source``, ``references``, ``units_convention``,
+      and a ``history`` line (UTC time, package version, title) appended.
+    """
+    ds = ds.copy(deep=False)
+    for var in ds.variables.values():
+        if "units" in var.attrs:
+            cf, reduced = cf_units(var.attrs["units"])
+            var.attrs["units"] = cf
+            if reduced is not None:
+                var.attrs.setdefault(REDUCED_ATTR, reduced)
+    if "converged" in ds.variables:
+        attrs = ds["converged"].attrs
+        attrs.pop("units", None)
+        attrs.update(CONVERGED_FLAGS)
+        ds["converged"] = ds["converged"].astype(np.int8)
+    if "status" in ds.variables and ds["status"].dtype.kind in "OUS":
+        ds["status_flag"] = (ds["status"].dims, status_codes(ds["status"].values), {
+            "long_name": "status as a flag (the status variable holds the same as text)",
+            "flag_values": np.arange(len(STATUS_FLAGS), dtype=np.int8),
+            "flag_meanings": " ".join(STATUS_FLAGS),
+        })  # fmt: skip
+    for dim, n in list(ds.sizes.items()):
+        if dim not in ds.coords:
+            ds = ds.assign_coords({dim: (dim, np.arange(n, dtype=np.int32),
+                                         {"long_name": f"index along {dim}", "units": "1"})})  # fmt: skip
+    for name in ds.coords:
+        var = ds.variables[name]
+        var.attrs.pop("_FillValue", None)
+        if "long_name" not in var.attrs and "standard_name" not in var.attrs:
+            var.attrs["long_name"] = f"index along {name}" if var.dtype.kind in "iu" else name
+        if var.dtype.kind in "OUS":
+            if var.dims == (name,):
+                var.encoding["dtype"] = "S1"
+        else:
+            var.encoding["_FillValue"] = None
+    title = str(ds.attrs.get("title") or "hugomap dataset")
+    stamp = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+    line = f"{stamp} hugomap {__version__}: {title}"
+    old = str(ds.attrs.get("history", ""))
+    ds.attrs.update(
+        Conventions=CONVENTIONS,
+        title=title,
+        source=str(ds.attrs.get("source") or f"hugomap {__version__}"),
+        references=str(ds.attrs.get("references") or REFERENCES),
+        units_convention=UNITS_CONVENTION,
+        history=f"{old}\n{line}" if old else line,
+    )
+    return ds
+
+
+# -- SI values of LJ quantities (a scene's ``units`` block) ---------------------------------
+K_B = 1.380649e-23  # Boltzmann constant [J K-1], exact since the 2019 SI
+#: Quantities that get an ``<name>_SI`` (and ``<name>_SI_err``) companion, also as ``ref_*``.
+SI_QUANTITIES = ("u_p", "piston_velocity", "u_p_set", "u_p_measured", "D", "rho", "V", "P",
+                 "P_rh", "T", "E", "E_minus_E0", "rho0", "P0", "E0", "T0")  # fmt: skip
+SI_SUFFIX = "_SI"
+
+
+def lj_si_factors(lj: Mapping[str, float]) -> dict[str, tuple[float, str]]:
+    """Reduced unit → (SI value of one reduced unit, UDUNITS unit) for an LJ model with
+    ``lj`` = {sigma [m], epsilon_over_kB [K], mass [kg]} (a scene's ``units`` block):
+    ε = k_B (ε/k_B) [J], τ = σ √(m/ε) [s]; velocity σ/τ [m s-1], number density → mass
+    density m/σ³ [kg m-3], volume per atom → per mass σ³/m [m3 kg-1], pressure ε/σ³ [Pa],
+    temperature ε/k_B [K], energy per atom → per mass ε/m [J kg-1], time τ [s], length σ [m].
+    """
+    sigma, mass = float(lj["sigma"]), float(lj["mass"])
+    eps = K_B * float(lj["epsilon_over_kB"])
+    tau = sigma * math.sqrt(mass / eps)
+    return {
+        "sigma tau^-1": (sigma / tau, "m s-1"), "sigma^-3": (mass / sigma**3, "kg m-3"),
+        "sigma^3": (sigma**3 / mass, "m3 kg-1"), P_UNIT: (eps / sigma**3, "Pa"),
+        "epsilon k_B^-1": (float(lj["epsilon_over_kB"]), "K"), "epsilon": (eps / mass, "J kg-1"),
+        "tau": (tau, "s"), "sigma": (sigma, "m"),
+    }  # fmt: skip
+
+
+def si_attrs(lj: Mapping[str, float]) -> dict[str, float]:
+    """Global attributes that record the LJ model of the ``_SI`` variables."""
+    eps = K_B * float(lj["epsilon_over_kB"])
+    return {
+        "lj_sigma_m": float(lj["sigma"]), "lj_epsilon_over_kB_K": float(lj["epsilon_over_kB"]),
+        "lj_mass_kg": float(lj["mass"]), "lj_tau_s": float(lj["sigma"]) * math.sqrt(float(lj["mass"]) / eps),
+    }  # fmt: skip
+
+
+def si_companions(ds: xr.Dataset, lj: Mapping[str, float]) -> dict[str, xr.Variable]:
+    """SI copies of the ``SI_QUANTITIES`` (and their ``_err``, and the reference's ``ref_*``)
+    of a dataset in LJ reduced units: ``D`` → ``D_SI``, ``D_err`` → ``D_SI_err``,
+    ``ref_P`` → ``ref_P_SI``, the ``u_p`` coordinate → ``u_p_SI``; values times
+    ``lj_si_factors(lj)`` of the variable's reduced unit (``reduced_units``, else ``units``)."""
+    factors = lj_si_factors(lj)
+    out = {}
+    for name, var in ds.variables.items():
+        ref = name.startswith("ref_")
+        base = name[4:] if ref else name
+        err = base.endswith(ERR_SUFFIX)
+        q = base[: -len(ERR_SUFFIX)] if err else base
+        unit = var.attrs.get(REDUCED_ATTR, var.attrs.get("units"))
+        if q not in SI_QUANTITIES or unit not in factors or var.dtype.kind != "f":
+            continue
+        f, si = factors[unit]
+        new = ("ref_" if ref else "") + q + SI_SUFFIX + (ERR_SUFFIX if err else "")
+        long_name = str(var.attrs.get("long_name", name))
+        out[new] = xr.Variable(var.dims, np.asarray(var.values, dtype=float) * f,
+                               {"units": si, "long_name": f"{long_name} (SI, from the units block)"})  # fmt: skip
+    return out
+
+
+def with_si(ds: xr.Dataset, scene: Mapping) -> xr.Dataset:
+    """``ds`` with ``si_companions`` and ``si_attrs`` when the scene has a ``units`` block
+    (MD); else ``ds`` unchanged."""
+    lj = scene.get("units") if isinstance(scene, Mapping) else None
+    if not lj:
+        return ds
+    ds = ds.assign(si_companions(ds, lj))
+    ds.attrs.update(si_attrs(lj))
+    return ds
+
+
 def control_vars(history, units: UnitTable) -> dict:
     """The control loop's record (``window.methods.ControlHistory``) as dataset variables:
     per averaging window k ``control_{t, a, a_err, omega, u_in, u_out, du}`` and the raw ω
@@ -211,7 +395,8 @@ def point_dataset(
     units: UnitTable,
 ) -> xr.Dataset:
     """One Hugoniot point as a Dataset (NaN-filled where a failed run has no value), in the
-    backend's ``units``."""
+    backend's ``units``; with SI companions (``with_si``) when the scene has a ``units``
+    block. It declares CF-1.11: ``io.atomic.write_netcdf`` writes it through ``cf_dataset``."""
     point_vars, pole_vars, axes = units.point, units.pole, units.axes
     vals = {k: values.get(k, np.nan) for k in point_vars}
     vals.update(
@@ -244,9 +429,14 @@ def point_dataset(
         )
     ds = xr.Dataset(data)
     ds.attrs.update(
-        scheme=scheme, scene=scene, scene_config=json.dumps(scene_config, sort_keys=True)
+        Conventions=CONVENTIONS,
+        title=f"Hugoniot point of scene {scene}, scheme {scheme}",
+        scheme=scheme,
+        scene=scene,
+        unit_system=units.system,
+        scene_config=json.dumps(scene_config, sort_keys=True),
     )
-    return ds
+    return with_si(ds, scene_config)
 
 
 def _read_scalars(path: str | Path, var_attrs: dict[str, dict]) -> tuple[dict, dict]:
@@ -286,6 +476,11 @@ def aggregate_points(
     430 MB; a netCDF file of 0-d variables gains nothing from dask chunks.) A variable
     missing from some files (``_err`` values of failed points, the pole of a point whose
     loading failed) is NaN there; the pole is taken from the first point that has it.
+    Of the points' global attributes only ``scene_config`` is kept (a point's ``scheme`` or
+    window attributes say nothing of the aggregate). The reference's points lie along
+    ``ref_point``, which gets an index coordinate when written (``cf_dataset``), so scenes
+    with references of different lengths combine (``open_scenes``). (The SI companions of a
+    scene with a ``units`` block are added to the joined aggregate: ``stages.aggregation``.)
     """
     if not paths:
         raise ValueError(f"scene {scene}: no point files to aggregate")
@@ -296,7 +491,7 @@ def aggregate_points(
         values, gattrs = _read_scalars(p, var_attrs)
         rows.append(values)
         if i == 0:
-            first_attrs = gattrs
+            first_attrs = {k: v for k, v in gattrs.items() if k == "scene_config"}
     point_vars, pole_vars, axes = units.point, units.pole, units.axes
     keep = [
         k for k in (*point_vars, *(k + ERR_SUFFIX for k in point_vars)) if k != "piston_velocity"
@@ -341,5 +536,37 @@ def aggregate_points(
                 long_name=f"reference Hugoniot ({model}): " + var.attrs.get("long_name", name),
             )
     out.attrs.update(provenance_attrs(config))
-    out.attrs.update(scene=scene, title=f"Hugoniot of scene {scene}")
+    out.attrs.update(Conventions=CONVENTIONS, scene=scene, title=f"Hugoniot of scene {scene}",
+                     unit_system=units.system)  # fmt: skip
     return out
+
+
+# -- many files as one dataset (dask) ------------------------------------------------------
+def _open_many(paths: Sequence[str | Path], dim: str, label, **kwargs) -> xr.Dataset:
+    def preprocess(ds: xr.Dataset) -> xr.Dataset:
+        # non-index coordinates (the reference's compression) vary per file: variables
+        return ds.reset_coords().expand_dims({dim: [label(ds)]})
+
+    opts = {"engine": "netcdf4", "combine": "nested", "concat_dim": dim, "join": "outer",
+            "data_vars": "all", "coords": "minimal", "compat": "no_conflicts",
+            "combine_attrs": "drop_conflicts", "preprocess": preprocess}  # fmt: skip
+    opts.update(kwargs)
+    return xr.open_mfdataset([str(p) for p in paths], **opts)
+
+
+def open_scenes(paths: Sequence[str | Path], **kwargs) -> xr.Dataset:
+    """Aggregates (``results/hugoniot/<scene>.nc``) as one lazy, dask-backed dataset with a
+    leading ``scene`` dimension labelled by each file's ``scene`` attribute: ``u_p``,
+    ``scheme`` and ``ref_point`` are joined outer (NaN where a scene has no such point);
+    global attributes that differ between scenes (config, history) are dropped (each
+    file keeps its own). ``kwargs`` go to ``xarray.open_mfdataset`` (e.g. ``chunks``)."""
+    return _open_many(paths, "scene", lambda ds: str(ds.attrs.get("scene", "")), **kwargs)
+
+
+def open_points(paths: Sequence[str | Path], **kwargs) -> xr.Dataset:
+    """Point files as one lazy, dask-backed dataset along a ``point`` dimension labelled by
+    each file's path; the front history (``sample``), steady profile (``bin``), control
+    record (``window_k``, ``omega_sample``) and trials (``trial``) are NaN-padded to the
+    longest; a variable a point lacks (a failed point's values) is NaN there. For many
+    points' scalars only, ``aggregate_points`` is much faster (it reads no arrays)."""
+    return _open_many(paths, "point", lambda ds: str(ds.encoding.get("source", "")), **kwargs)

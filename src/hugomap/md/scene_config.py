@@ -3,6 +3,11 @@
 ``hugomap.config.validate_config`` calls ``resolve_defaults`` and then ``check`` on every MD
 scene once the schema has passed (and filled its defaults). Validation runs when Snakemake
 parses the workflow, so this module stays light: no numba, no xarray.
+
+The optional ``units`` block (``sigma`` [m], ``epsilon_over_kB`` [K], ``mass`` [kg]: the
+substance the reduced units stand for) is checked by the schema alone (all three, positive,
+in plausible ranges); it changes no run, only adds SI companions (``D_SI``, ...) to the
+point files and the aggregate (``io.dataset.with_si``; docs/datasets.md).
 """
 
 from __future__ import annotations

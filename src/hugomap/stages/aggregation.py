@@ -1,5 +1,6 @@
 """Stage ``aggregate``: all points of a scene → ``results/hugoniot/<scene>.nc`` (dims
-scheme × u_p), in the scene backend's units, with its reference beside them."""
+scheme × u_p), in the scene backend's units, with its reference beside them, CF-1.11
+(``io.dataset.cf_dataset``; an MD scene with a ``units`` block also in SI: ``with_si``)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from ..io.atomic import write_netcdf
-from ..io.dataset import aggregate_points
+from ..io.dataset import aggregate_points, with_si
 from ..registry import backend as backend_of
 
 
@@ -26,7 +27,8 @@ def aggregate(
 ) -> Path:
     """Points are grouped by the ``scheme`` attribute of their files (``scheme`` is the
     default for files without one), each group is joined along u_p, and the groups along
-    scheme; a variable that one scheme's points never produced (all failed) is NaN there."""
+    scheme; a variable that one scheme's points never produced (all failed) is NaN there.
+    A scene with a ``units`` block (MD) gets ``<name>_SI`` companions (``with_si``)."""
     ref = None
     if reference:
         with xr.open_dataset(reference, engine="netcdf4") as r:
@@ -38,7 +40,8 @@ def aggregate(
             if not groups:  # every point carries its scene's config: the backend's units
                 sc = json.loads(getattr(nc, "scene_config", "{}"))
         groups.setdefault(str(name), []).append(p)
-    units = backend_of(config.get("scenes", {}).get(scene, sc)).units
+    scene_config = config.get("scenes", {}).get(scene, sc)
+    units = backend_of(scene_config).units
     parts = [
         aggregate_points(ps, name, ref, config, scene, units).sortby("u_p")
         for name, ps in groups.items()
@@ -52,4 +55,4 @@ def aggregate(
             parts[i] = parts[i].assign({k: (("scheme", "u_p"), fill, src.attrs)})
     ds = xr.concat(parts, dim="scheme", data_vars="minimal", coords="minimal", compat="override",
                    join="outer", combine_attrs="override")  # fmt: skip
-    return write_netcdf(ds.load(), out)
+    return write_netcdf(with_si(ds.load(), scene_config), out)
