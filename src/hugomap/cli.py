@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     p = stage("piston", "continue the piston run and measure the Hugoniot point")
     p.add_argument("--loaded", required=True)
     p.add_argument("--u-p", type=float, required=True)
-    p = stage("reference", "equilibrium-MD reference Hugoniot")
+    p = stage("reference", "the scene's reference Hugoniot (computed, or copied from a shared one)")
     p.add_argument("--shared", default=None, help="copy this reference made for the same inputs")
     p = stage("window", "cut the moving window out of the loading checkpoint")
     p.add_argument("--loaded", required=True)
@@ -110,8 +110,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--config",
         default=None,
-        help="the sweep's config (default: config/config.yaml if present, else the scenes "
-        "found under --results)",
+        help="the sweep's config (default: the config the results were made with, as "
+        "recorded in them; before anything has run, config/config.yaml if present, else the "
+        "scenes found under --results)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable JSON output")
     p = add(
