@@ -12,8 +12,11 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
+from typing import BinaryIO
 
 import xarray as xr
 
@@ -37,20 +40,16 @@ def _mode() -> int:
     return 0o666 & ~umask()
 
 
-def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write ``ds`` to ``path`` atomically (netCDF4 format), mode ``0o666 & ~umask``; a
-    dataset whose ``Conventions`` attribute starts with ``CF-`` is written CF-encoded
-    (``io.dataset.cf_dataset``). Return the path."""
-    if str(ds.attrs.get("Conventions", "")).startswith("CF-"):
-        from .dataset import cf_dataset
-
-        ds = cf_dataset(ds)
+def _write(path: str | os.PathLike, fill: Callable[[str], None]) -> Path:
+    """The one atomic write: ``fill(tmp)`` writes a temporary file in the target's folder,
+    which gets mode ``0o666 & ~umask`` and is renamed onto ``path``; a failed write leaves
+    no partial file at ``path``."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        ds.to_netcdf(tmp, engine="netcdf4")
+        fill(tmp)
         os.chmod(tmp, _mode())
         os.replace(tmp, path)
     except BaseException:
@@ -59,20 +58,36 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     return path
 
 
+def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write ``ds`` to ``path`` atomically (netCDF4 format), mode ``0o666 & ~umask``; a
+    dataset whose ``Conventions`` attribute starts with ``CF-`` is written CF-encoded
+    (``io.dataset.cf_dataset``). Return the path."""
+    if str(ds.attrs.get("Conventions", "")).startswith("CF-"):
+        from .dataset import cf_dataset
+
+        ds = cf_dataset(ds)
+    return _write(path, lambda tmp: ds.to_netcdf(tmp, engine="netcdf4"))
+
+
+def write_bytes(data: bytes, path: str | os.PathLike) -> Path:
+    """Write ``data`` to ``path`` atomically, mode ``0o666 & ~umask``."""
+    return _write(path, lambda tmp: Path(tmp).write_bytes(data))
+
+
+def write_stream(source: BinaryIO, path: str | os.PathLike) -> Path:
+    """Copy the open binary file ``source`` (from its current position) to ``path``
+    atomically, mode ``0o666 & ~umask``."""
+
+    def fill(tmp: str) -> None:
+        with open(tmp, "wb") as fh:
+            shutil.copyfileobj(source, fh)
+
+    return _write(path, fill)
+
+
 def write_text(text: str, path: str | os.PathLike) -> Path:
     """Write ``text`` to ``path`` atomically, mode ``0o666 & ~umask``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-            os.fchmod(fh.fileno(), _mode())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return write_bytes(text.encode(), path)
 
 
 def write_json(obj: object, path: str | os.PathLike) -> Path:

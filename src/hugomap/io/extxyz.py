@@ -38,12 +38,13 @@ import io
 import math
 import os
 import re
-import shutil
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
+
+from .atomic import write_bytes, write_stream
 
 ANGSTROM_PER_M = 1.0e10
 FS_PER_S = 1.0e15
@@ -56,22 +57,6 @@ _HEADER = ("Lattice", "Origin", "pbc", "Properties", "Time", "length_unit", "tim
 
 class SnapshotError(ValueError):
     """Bad snapshot input (shapes, names, units); the message names the argument."""
-
-
-def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.chmod(tmp, 0o644)  # mkstemp creates 0600; a snapshot is for sharing
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
 
 
 def _value(key: str, value: object) -> str:
@@ -231,7 +216,7 @@ def write_extxyz(
     data = text.encode()
     if append and path.exists():
         data = path.read_bytes() + data
-    return atomic_write_bytes(path, data)
+    return write_bytes(data, path)
 
 
 class Trajectory:
@@ -260,22 +245,12 @@ class Trajectory:
         """Copy the frames taken so far to ``path`` (atomically); None when there are none."""
         if not self.frames:
             return None
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         self._file.flush()
         self._file.seek(0)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
         try:
-            with os.fdopen(fd, "wb") as fh:
-                shutil.copyfileobj(self._file, fh)
-            os.chmod(tmp, 0o644)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+            return write_stream(self._file, path)
         finally:
             self._file.seek(0, os.SEEK_END)
-        return path
 
 
 class RecordingProfile:
@@ -313,7 +288,6 @@ __all__ = [
     "RecordingProfile",
     "SnapshotError",
     "Trajectory",
-    "atomic_write_bytes",
     "format_frame",
     "snapshot_paths",
     "write_extxyz",

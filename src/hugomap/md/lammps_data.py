@@ -125,9 +125,9 @@ def format_data(
 
 def write_data(path: str | os.PathLike, text: str) -> Path:
     """Write a data file's text atomically (temporary file + rename)."""
-    from ..io.extxyz import atomic_write_bytes
+    from ..io.atomic import write_bytes
 
-    return atomic_write_bytes(path, text.encode())
+    return write_bytes(text.encode(), path)
 
 
 def _fail(path, line: int | None, what: str):

@@ -25,11 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.atomic import write_bytes
 from ..io.extxyz import (
     ANGSTROM_PER_M,
     FS_PER_S,
     SnapshotError,
-    atomic_write_bytes,
     format_frame,
 )
 
@@ -225,4 +225,4 @@ def write_png(
         sc.set_sizes([size])
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    return atomic_write_bytes(path, buf.getvalue())
+    return write_bytes(buf.getvalue(), path)

@@ -10,7 +10,6 @@ import resource
 import time
 from pathlib import Path
 
-import numpy as np
 import xarray as xr
 
 from ..io.atomic import write_netcdf
@@ -119,8 +118,3 @@ def write_extras(write, *args) -> None:
         write(*args)
     except (ValueError, OSError) as exc:
         log.warning("snapshot not written: %s", exc)
-
-
-def nan_front(h: dict) -> float:
-    xf = np.asarray(h["front"], dtype=float)
-    return float(np.nanmedian(xf)) if np.isfinite(xf).any() else float("nan")
