@@ -195,18 +195,22 @@ def piston_point(
         return write_point(out, b, scene, scheme, base, {}, None, ds.attrs["status"],
                            ds.attrs.get("diagnostic", ""))  # fmt: skip
     info = info_of(ds)
-    sim0 = b.load(ds, loaded)  # verified: its pole is used whichever state the run resumes from
     part = Path(str(out) + ".part.nc")
     _remove_stale_temporaries(Path(out))
     resumed = _resume_partial(b, part, ds)
-    src, sim, h = (ds, sim0, history_of(ds)) if resumed is None else resumed
+    loaded_history = history_of(ds)
+    if resumed is None:
+        src, sim, h = ds, b.load(ds, loaded), loaded_history  # verified on load
+    else:
+        b.read_checkpoint(loaded)  # verified too: its pole is used whichever state resumes
+        src, sim, h = resumed
     pole = Pole.from_dataset(ds)
     clock = Clock(json.loads(src.attrs.get("cost", ds.attrs.get("cost", "{}"))))
     frame = b.piston_frame(sim, scene, u_p, info)
     profile = b.profile(sim, scene, info)
     step0 = sim.steps
     n_since, x_start = [0], [None]
-    rate = loading_rate(history_of(ds), json.loads(ds.attrs.get("cost", "{}")),
+    rate = loading_rate(loaded_history, json.loads(ds.attrs.get("cost", "{}")),
                         ds.attrs.get("wall_per_time"))  # fmt: skip
     log_drive_start(sim, h, frame, rate, x_start)
 
