@@ -67,3 +67,81 @@ def test_robust_slope_ignores_tracker_jumps():
     y[jumps] += 5.0 * np.sign(t[jumps] - 5.0)  # late samples jump ahead, early ones behind
     assert abs(line_fit(t, y)[0] / 7.4 - 1) > 0.02
     assert abs(robust_slope(t, y) / 7.4 - 1) < 0.01
+
+
+# -- the point measurement: "ok" means the jump conditions close ------------------------------
+class _ToyProfile:
+    """Bins of width 1 from 0 whose sums are the fields themselves (count, u, ρ, P, E); a
+    slab's state is the mean over its bins."""
+
+    x0, bin_width = 0.0, 1.0
+
+    def velocity(self, sums):
+        return sums[:, 1], sums[:, 0]
+
+    def state(self, summed, n_bins):
+        from hugomap.states import SlabState
+
+        m = summed / n_bins
+        return SlabState(rho=m[2], u=m[1], P=m[3], Pyy=m[3], Pzz=m[3], E=m[4])
+
+
+def _toy_run(P_bias: float, noise: float, wander: float = 0.0, seed: int = 3):
+    """Samples of a steady front at D into the pole (ρ0 1, P0 1, E0 0) at rest, u_p 1, the
+    state behind exact except P × (1 + P_bias), every field with white noise of relative
+    size ``noise``; the front position may wander by ``wander`` (one sine over the run)."""
+    from hugomap.states import Pole
+
+    rng = np.random.default_rng(seed)
+    D, u_p = 3.0, 1.0
+    rho, P, E = _behind(1.0, 1.0, 0.0, 0.0, D, u_p)
+    t = np.linspace(0.0, 20.0, 200)
+    xf = 10.0 + D * t + wander * np.sin(2 * np.pi * t / t[-1])
+    edges = np.arange(101)
+    sums = np.empty((t.size, 100, 5))
+    for i, x in enumerate(xf):
+        behind = (edges[1:] <= x)[:, None]
+        ahead_state = np.array([30.0, 0.0, 1.0, 1.0, 0.0])
+        behind_state = np.array([30.0, u_p, rho, P * (1 + P_bias), E])
+        s = np.where(behind, behind_state, ahead_state)
+        s[:, 2:] *= 1 + noise * rng.standard_normal((100, 3))
+        s[:, 1] += noise * rng.standard_normal(100)
+        sums[i] = s
+    h = {"t": t, "front": xf, "x_left": np.zeros(t.size), "x_right": np.full(t.size, 100.0),
+         "sums": sums}  # fmt: skip
+    pole = Pole(rho0=1.0, P0=1.0, E0=0.0, T0=1.0, Pyy0=1.0, rho0_err=0.0, P0_err=0.0,
+                E0_err=0.0, T0_err=0.0, Pyy0_err=0.0)  # fmt: skip
+    return h, pole
+
+
+def test_a_point_is_ok_only_if_its_residuals_close_within_tolerance_and_errors():
+    """Exact jump states with noise: ok. A 0.6 % momentum bias, inside residual_tol = 1 %
+    but 10+ errors wide with little noise: not ok (it is a bias, not noise). The same bias
+    (0.4 %) under noise large enough to hide it: ok (its error covers it)."""
+    from hugomap.analysis.shock import measure_point
+
+    for bias, noise, status in ((0.0, 0.002, "ok"), (0.006, 0.0005, "not_converged"),
+                                (0.004, 0.1, "ok")):  # fmt: skip
+        h, pole = _toy_run(bias, noise)
+        r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                          residual_tol=0.01)  # fmt: skip
+        assert r["status"] == status, (bias, noise, r["diagnostic"])
+        if status != "ok":
+            assert "3 of its error" in r["diagnostic"]
+
+
+def test_front_speed_error_covers_a_slow_wander():
+    """A front that wanders by A = 0.5 (one sine over the run, T = 20: an acoustic wave
+    ringing longer than the average) moves a least-squares D by 6A/(πT) = 0.048 (the
+    Theil–Sen slope by about as much); the AR(1)-corrected error of the whole span is far
+    smaller, the error from the slope's scatter over four spans covers it."""
+    from hugomap.analysis.shock import measure_point
+    from hugomap.analysis.stats import CorrelatedSlope
+
+    h, pole = _toy_run(0.0, 0.002, wander=0.5)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                      residual_tol=0.01)  # fmt: skip
+    dev = abs(r["D"] - 3.0)
+    assert dev > 0.02
+    assert CorrelatedSlope().fit(h["t"], h["front"])[1] < 0.5 * dev
+    assert r["D_err"] >= dev

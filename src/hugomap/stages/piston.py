@@ -22,7 +22,7 @@ from ..analysis.shock import measure_point
 from ..failures import CheckpointError, HugomapFailure
 from ..registry import backend as backend_of
 from ..states import PistonFrame, Pole
-from ..window.piston import History, drive
+from ..window.piston import History, drive, steady_track
 from .files import (
     INFO_ATTR,
     Clock,
@@ -235,6 +235,7 @@ def piston_point(
         r = measure_point(
             {k: a[k][d] for k in ("t", "front", "x_left", "x_right", "sums")}, profile, pole,
             frame.u_behind, frame.u_ahead, sh["gap"], sh["avg_length"], sh["residual_tol"],
+            track=steady_track(a, frame),
         )  # fmt: skip
         r.pop("u_p"), r.pop("u_p_err")  # u_p is exact: the dataset's coordinate
         status, diagnostic = str(r.pop("status")), str(r.pop("diagnostic"))

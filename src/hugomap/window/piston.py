@@ -62,6 +62,24 @@ class History:
         return h
 
 
+FORMED_FRACTION = 0.5  # of the loading distance: the front's track counts from there on
+
+
+def steady_track(a: dict[str, np.ndarray], frame: PistonFrame) -> tuple[np.ndarray, np.ndarray]:
+    """The front's track (times, positions) over the steady part of a piston run, for D:
+    every drive sample, and the loading samples once the front has travelled
+    ``FORMED_FRACTION`` of the loading distance (the shock has formed; before, the front
+    starts at the piston and a weak one is still steepening). ``a``: ``History.arrays()``.
+    Measured on the LJ liquid (seed 1, u_p = 2): the drive alone, 7 τ, gave D 1.3 % high
+    (the front wanders ±0.3 σ over 4-10 τ); from half the loading on, 10 τ, within 0.1 %
+    of the equilibrium EOS."""
+    x = a["front"]
+    with np.errstate(invalid="ignore"):
+        formed = x - frame.x_origin >= FORMED_FRACTION * frame.load_distance
+    m = (a["stage"] == 1) | ((a["stage"] == 0) & formed)
+    return a["t"][m], x[m]
+
+
 def take_sample(
     solver: ShockSolver, frame: PistonFrame, profile: Profile, history: History, stage: int
 ) -> float:

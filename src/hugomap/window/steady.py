@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..analysis.shock import bin_edges, measure_point, track_front
-from ..analysis.stats import CorrelatedSlope
+from ..analysis.stats import CorrelatedSlope, slope_scatter
 from ..states import Pole, Profile
 from .methods import OmegaSignal
 from .protocol import WindowSolver
@@ -39,7 +39,9 @@ def steady_state(
 
     A particle count that never changed over the average (the front moved less than one
     particle's worth, L/|q_sh − q_up|) gets that quantum's uncertainty instead of the fit's
-    0: two ends uniform within it, std quantum/√6 over the average."""
+    0: two ends uniform within it, std quantum/√6 over the average. The slope's error is
+    the larger of the AR(1)-corrected one and its scatter over four spans
+    (``stats.slope_scatter``)."""
     g = win.geom
     n = max(16, int(round(duration / (every * max(win.dt, 1e-300)))))
     t, front, sums_all, omega = [], [], [], []
@@ -52,6 +54,9 @@ def steady_state(
         sums_all.append(sums)
     t_a, om = np.asarray(t), np.asarray(omega)
     a, se, _ = CorrelatedSlope().fit(t_a, om)
+    wander = slope_scatter(t_a, om)  # ω wanders with the front (analysis.shock.measure_point)
+    if np.isfinite(wander):
+        se = max(float(se), wander)
     if np.ptp(om) == 0 and signal.kind == "N":
         quantum = 1.0 / abs(signal.q_sh - signal.q_up)  # in ω
         se = quantum / (np.sqrt(6.0) * max(t_a[-1] - t_a[0], 1e-300))
