@@ -311,6 +311,7 @@ class CSPHSimulation:
         st.time += dt
         self.steps += 1
         self._check(bad)
+        return dt
 
     def _kernel_ratio_density(self) -> int:
         """ρ(t+Δt) = ρ(t) ρ̂(x(t+Δt), l*)/ρ̂(x(t), l(t)) for the mobile particles (``csph``
@@ -331,7 +332,6 @@ class CSPHSimulation:
             st.rho, st.l, st.m, self._rhat[0], self._rhat[1], self._rhat[2], mobile, st.dim,
             self.rho_max,
         )  # fmt: skip
-        return dt
 
     def advance(self, n_steps: int) -> None:
         """Run ``n_steps`` steps (raises SPHUnstable)."""
