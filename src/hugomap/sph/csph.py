@@ -47,7 +47,8 @@ density removes that memory: each step multiplies ρ by the change of the kernel
 ρ̂_i = Σ_j m_j W(r_ij, h_ij) (j = i included) over the step,
 
     ρ_i(t+Δt) = ρ_i(t) ρ̂_i(x(t+Δt), l*) / ρ̂_i(x(t), l(t)),   l* = (m/ρ*)^(1/dim),
-    ρ* = ρ exp(−μ̇Δt) (the continuity prediction, for the smoothing lengths at t+Δt),
+    ρ* = ρ exp(−μ̇Δt) (the continuity prediction, for the smoothing lengths at t+Δt; then
+    refined: ρ̂(t+Δt) again with l from the ratio's own ρ, ``simulation.KERNEL_RATIO_PASSES``),
 
 so that over a run ρ_i/ρ_i(0) = ρ̂_i(t)/ρ̂_i(0) to O(Δt) per step: a function of where the
 particles are, not of how they got there. On a uniform line of spacing Δx (h ∝ l) ρ̂ is

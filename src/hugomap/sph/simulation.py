@@ -41,6 +41,13 @@ SERIAL_BELOW = 8192
 #: Density updates (``csph`` module docstring, Density); "auto": kernel_ratio in 1D,
 #: continuity in 2D.
 DENSITY_MODES = ("auto", "kernel_ratio", "continuity")
+#: Passes of the kernel_ratio step that recompute ρ̂(t+Δt) with the sizes l = (m/ρ)^(1/dim)
+#: of the previous pass's ρ (the first pass uses the continuity prediction's). The next step
+#: divides by ρ̂ at the sizes of its own ρ, so the product of the ratios telescopes only to
+#: the extent these agree: behind a 1D copper shock at 4000 m/s the density's memory of the
+#: front was −0.069 % with no extra pass, −0.025 % with one, −0.011 % with two (D −0.040,
+#: −0.009, −0.003 %); a pass is one kernel sum (a fifth of a 1D step).
+KERNEL_RATIO_PASSES = 2
 
 
 @contextmanager
@@ -317,21 +324,27 @@ class CSPHSimulation:
         """ρ(t+Δt) = ρ(t) ρ̂(x(t+Δt), l*)/ρ̂(x(t), l(t)) for the mobile particles (``csph``
         module docstring, Density): ``update`` has moved the particles and left the
         continuity prediction's l* in the state, the walls have moved; ρ(t), ρ̂(t) are in
-        ``_rhat``. Returns the number of bad particles (``csph.rescale_density``)."""
+        ``_rhat``. Then ``KERNEL_RATIO_PASSES`` more passes with l from the last ρ. Returns
+        the number of bad particles (``csph.rescale_density``)."""
         st = self.state
         if self._list_valid():
             csph.move_packed(self._pk, st.x, st.l, self._src, self._side, self.walls)
         else:
             self._build()
-        csph.density_sum(
-            self._pk, st.n, st.dim, self._nbr, self._nnb, self.theta, self.periodic,
-            self.length, self._rhat[2],
-        )  # fmt: skip
         mobile = np.ones(st.n, dtype=np.bool_) if self.frozen is None else ~self.frozen
-        return csph.rescale_density(
-            st.rho, st.l, st.m, self._rhat[0], self._rhat[1], self._rhat[2], mobile, st.dim,
-            self.rho_max,
-        )  # fmt: skip
+        bad = 0
+        for k in range(1 + KERNEL_RATIO_PASSES):
+            if k:  # ρ̂(t+Δt) again with the sizes of the last pass's ρ
+                csph.move_packed(self._pk, st.x, st.l, self._src, self._side, self.walls)
+            csph.density_sum(
+                self._pk, st.n, st.dim, self._nbr, self._nnb, self.theta, self.periodic,
+                self.length, self._rhat[2],
+            )  # fmt: skip
+            bad = csph.rescale_density(
+                st.rho, st.l, st.m, self._rhat[0], self._rhat[1], self._rhat[2], mobile,
+                st.dim, self.rho_max,
+            )  # fmt: skip
+        return bad
 
     def advance(self, n_steps: int) -> None:
         """Run ``n_steps`` steps (raises SPHUnstable)."""
