@@ -44,18 +44,20 @@ at half the spacing). Momentum and total energy are conserved pairwise (E_kin + 
 the piston's work to round-off, e = u_p²/2 behind the front), so the EOS is evaluated at the
 wrong density and the shock speed comes out low: −0.39, −0.89, −1.7 %. The ``kernel_ratio``
 density removes that memory: each step multiplies ρ by the change of the kernel sum
-ρ̂_i = Σ_j m_j W(r_ij, h_ij) (j = i included) over the step,
+n̂_i = Σ_j W(r_ij, h_ij) (j = i included; a number density: with the masses m_j in it, a
+heavy neighbour across a contact discontinuity would count in a light particle's density)
+over the step,
 
-    ρ_i(t+Δt) = ρ_i(t) ρ̂_i(x(t+Δt), l*) / ρ̂_i(x(t), l(t)),   l* = (m/ρ*)^(1/dim),
+    ρ_i(t+Δt) = ρ_i(t) n̂_i(x(t+Δt), l*) / n̂_i(x(t), l(t)),   l* = (m/ρ*)^(1/dim),
     ρ* = ρ exp(−μ̇Δt) (the continuity prediction, for the smoothing lengths at t+Δt; then
-    refined: ρ̂(t+Δt) again with l from the ratio's own ρ, ``simulation.KERNEL_RATIO_PASSES``),
+    refined: n̂(t+Δt) again with l from the ratio's own ρ, ``simulation.KERNEL_RATIO_PASSES``),
 
-so that over a run ρ_i/ρ_i(0) = ρ̂_i(t)/ρ̂_i(0) to O(Δt) per step: a function of where the
-particles are, not of how they got there. On a uniform line of spacing Δx (h ∝ l) ρ̂ is
-m/Δx times a constant, so behind the front ρ = m/Δx whatever the front did; the initial
+so that over a run ρ_i/ρ_i(0) = n̂_i(t)/n̂_i(0) to O(Δt) per step: a function of where the
+particles are, not of how they got there. On a uniform line of spacing Δx (h ∝ l) n̂ is
+1/Δx times a constant, so behind the front ρ = m/Δx whatever the front did; the initial
 normalisation (free surfaces, the kernel's lattice sum) cancels in the ratio. It needs the
 neighbourhood to keep its particles, so it is the 1D default (particles keep their order);
-in 2D a pore that closes would bring new neighbours into ρ̂ and the ratio would read them as
+in 2D a pore that closes would bring new neighbours into n̂ and the ratio would read them as
 compression, so 2D keeps the continuity equation (``simulation.density_mode``).
 """
 
@@ -451,9 +453,9 @@ def density_sum(
     length: np.ndarray,
     out: np.ndarray,
 ) -> None:
-    """Kernel sums ρ̂_i = m_i W(0, 2θ l_i) + Σ_j m_j W(r_ij, θ(l_i + l_j)) [kg/m^dim] into
-    ``out`` (rows 0..n−1; j over the list, wall ghosts included) from the positions, masses
-    and sizes l in ``pk`` (module docstring, Density)."""
+    """Kernel sums n̂_i = W(0, 2θ l_i) + Σ_j W(r_ij, θ(l_i + l_j)) [1/m^dim] into ``out``
+    (rows 0..n−1; j over the list, wall ghosts included) from the positions and sizes l in
+    ``pk`` (module docstring, Density)."""
     Lx = length[0] if periodic[0] else 0.0
     Ly = length[1] if periodic[1] else 0.0
     iLx = 1.0 / length[0] if periodic[0] else 0.0
@@ -462,7 +464,7 @@ def density_sum(
         xi = pk[i, PX]
         yi = pk[i, PY]
         li = pk[i, PL]
-        s = pk[i, PM] * w(0.0, pair_h(li, li, theta), dim)
+        s = w(0.0, pair_h(li, li, theta), dim)
         for k in range(nnb[i]):
             j = nbr[i, k]
             dx = pk[j, PX] - xi
@@ -470,7 +472,7 @@ def density_sum(
             dx -= Lx * np.rint(dx * iLx)
             dy -= Ly * np.rint(dy * iLy)
             r = math.sqrt(dx * dx + dy * dy)
-            s += pk[j, PM] * w(r, pair_h(li, pk[j, PL], theta), dim)
+            s += w(r, pair_h(li, pk[j, PL], theta), dim)
         out[i] = s
 
 
@@ -500,7 +502,7 @@ def move_packed(
 
 @njit
 def kernel_ratio(rho_old: float, rhat_old: float, rhat_new: float) -> float:
-    """ρ(t+Δt) = ρ(t) ρ̂(t+Δt)/ρ̂(t) [kg/m³] (module docstring, Density)."""
+    """ρ(t+Δt) = ρ(t) n̂(t+Δt)/n̂(t) [kg/m³] (module docstring, Density)."""
     return rho_old * rhat_new / rhat_old
 
 

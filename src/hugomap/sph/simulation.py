@@ -41,9 +41,9 @@ SERIAL_BELOW = 8192
 #: Density updates (``csph`` module docstring, Density); "auto": kernel_ratio in 1D,
 #: continuity in 2D.
 DENSITY_MODES = ("auto", "kernel_ratio", "continuity")
-#: Passes of the kernel_ratio step that recompute ρ̂(t+Δt) with the sizes l = (m/ρ)^(1/dim)
+#: Passes of the kernel_ratio step that recompute n̂(t+Δt) with the sizes l = (m/ρ)^(1/dim)
 #: of the previous pass's ρ (the first pass uses the continuity prediction's). The next step
-#: divides by ρ̂ at the sizes of its own ρ, so the product of the ratios telescopes only to
+#: divides by n̂ at the sizes of its own ρ, so the product of the ratios telescopes only to
 #: the extent these agree: behind a 1D copper shock at 4000 m/s the density's memory of the
 #: front was −0.069 % with no extra pass, −0.025 % with one, −0.011 % with two (D −0.040,
 #: −0.009, −0.003 %); a pass is one kernel sum (a fifth of a 1D step).
@@ -167,7 +167,7 @@ class CSPHSimulation:
         self._src = np.zeros(0, dtype=np.int64)
         self._side = np.zeros(0, dtype=np.int64)
         self._pk = np.zeros((n, csph.NPACK))
-        self._rhat = np.zeros((3, n))  # ρ(t), ρ̂(t), ρ̂(t+Δt) of the kernel_ratio step
+        self._rhat = np.zeros((3, n))  # ρ(t), n̂(t), n̂(t+Δt) of the kernel_ratio step
         #: particles moved rigidly at ``frozen_velocity`` and held at ``frozen_state``
         #: (ρ, e, l) with S = 0 (the window's inflow); None: all mobile
         self.frozen: np.ndarray | None = None
@@ -321,9 +321,9 @@ class CSPHSimulation:
         return dt
 
     def _kernel_ratio_density(self) -> int:
-        """ρ(t+Δt) = ρ(t) ρ̂(x(t+Δt), l*)/ρ̂(x(t), l(t)) for the mobile particles (``csph``
+        """ρ(t+Δt) = ρ(t) n̂(x(t+Δt), l*)/n̂(x(t), l(t)) for the mobile particles (``csph``
         module docstring, Density): ``update`` has moved the particles and left the
-        continuity prediction's l* in the state, the walls have moved; ρ(t), ρ̂(t) are in
+        continuity prediction's l* in the state, the walls have moved; ρ(t), n̂(t) are in
         ``_rhat``. Then ``KERNEL_RATIO_PASSES`` more passes with l from the last ρ. Returns
         the number of bad particles (``csph.rescale_density``)."""
         st = self.state
@@ -334,7 +334,7 @@ class CSPHSimulation:
         mobile = np.ones(st.n, dtype=np.bool_) if self.frozen is None else ~self.frozen
         bad = 0
         for k in range(1 + KERNEL_RATIO_PASSES):
-            if k:  # ρ̂(t+Δt) again with the sizes of the last pass's ρ
+            if k:  # n̂(t+Δt) again with the sizes of the last pass's ρ
                 csph.move_packed(self._pk, st.x, st.l, self._src, self._side, self.walls)
             csph.density_sum(
                 self._pk, st.n, st.dim, self._nbr, self._nnb, self.theta, self.periodic,
