@@ -140,7 +140,7 @@ class CSPHBackend:
         sim = CSPHSimulation(
             state, eos, strength, theta=num["theta"], cfl=num["cfl"], k_comp=num["k_comp"],
             walls=(sample.x_lo, 0.0, None, 0.0), grad_correction=num["grad_correction"],
-            dev_mean=num["dev_mean"], **extra,
+            dev_mean=num["dev_mean"], density=num["density"], **extra,
         )  # fmt: skip
         pole = Pole(rho0=sample.rho_solid / sample.distention_core)
         log.info(

@@ -3,7 +3,7 @@
 A checkpoint is a netCDF dataset holding every array of ``CSPHSimulation.checkpoint_arrays``
 (state, walls, neighbour list and its reference positions), the solver's scalars and
 parameters (EOS and strength with their sources, θ, C, k_comp, walls present, periodicity,
-gradient correction, ``dev_mean``), optional extra variables (the pole, the front history) and
+gradient correction, ``dev_mean``, the density update), optional extra variables (the pole, the front history) and
 a SHA-256 checksum over all of it: an ``io.checkpoint.CSPH_CHECKPOINT``. ``load_simulation``
 refuses a foreign, altered or truncated file with ``CheckpointError`` naming it, and the
 continuation of a loaded run is bit for bit the uninterrupted one (same thread count).
@@ -32,7 +32,7 @@ def solver_params(sim: CSPHSimulation) -> dict:
         "strength": sim.strength.name, "strength_params": sim.strength.params.tolist(),
         "strength_source": sim.strength.source, "theta": sim.theta, "cfl": sim.cfl,
         "k_comp": sim.k_comp, "grad_correction": sim.grad_correction,
-        "dev_mean": sim.dev_mean, "skin": sim.skin, "dt_floor": sim.dt_floor,
+        "dev_mean": sim.dev_mean, "density": sim.density_mode, "skin": sim.skin, "dt_floor": sim.dt_floor,
         "escape": sim.escape, "extent": list(sim.extent),
         "has_wall": [bool(b) for b in sim.has_wall], "periodic": [bool(b) for b in sim.periodic],
         "lo": sim.lo.tolist(), "length": sim.length.tolist(),
@@ -95,6 +95,8 @@ def from_dataset(ds: xr.Dataset, source: str | os.PathLike | None = None) -> CSP
         periodic=tuple(sol["periodic"]), lo=tuple(sol["lo"]), length=tuple(sol["length"]),
         grad_correction=sol["grad_correction"], dev_mean=sol["dev_mean"], skin=sol["skin"],
         dt_floor=sol["dt_floor"], escape_distance=sol["escape"],
+        # a checkpoint written before the density choice existed ran the continuity equation
+        density=sol.get("density", "continuity"),
     )  # fmt: skip
     sim.extent = tuple(sol["extent"])
     sim.restore(arrays, sc)

@@ -34,6 +34,31 @@ discrete kernel sum Σ_j (m_j/ρ_j) r |W'| is 0.980 of 1 for θ = 0.6 in 1D (0.9
 square lattice), so without B the stress carried across a plane is 0.98 σ and the continuity
 density under-tracks the real compression: the copper shock speed comes out 1.8–1.9 % low
 for u_p = 100–2000 m/s (−0.9 % to +0.03 % with it; tests/physics/test_sph_piston.py).
+
+Density. The seed integrates the continuity equation, ρ(t+Δt) = ρ exp(−μ̇Δt) (``continuity``).
+Its μ̇ is exact for a linear velocity field, but through a shock a few particles wide the
+weights of its pair sum change while the pair distances change unevenly, and what a particle
+takes through the front stays with it: behind a 1D copper shock the continuity density is
+0.19, 0.83, 2.7 % below the particle spacing's m/Δx at u_p = 1000, 2000, 4000 m/s (the same
+at half the spacing). Momentum and total energy are conserved pairwise (E_kin + E_int equals
+the piston's work to round-off, e = u_p²/2 behind the front), so the EOS is evaluated at the
+wrong density and the shock speed comes out low: −0.39, −0.89, −1.7 %. The ``kernel_ratio``
+density removes that memory: each step multiplies ρ by the change of the kernel sum
+n̂_i = Σ_j W(r_ij, h_ij) (j = i included; a number density: with the masses m_j in it, a
+heavy neighbour across a contact discontinuity would count in a light particle's density)
+over the step,
+
+    ρ_i(t+Δt) = ρ_i(t) n̂_i(x(t+Δt), l*) / n̂_i(x(t), l(t)),   l* = (m/ρ*)^(1/dim),
+    ρ* = ρ exp(−μ̇Δt) (the continuity prediction, for the smoothing lengths at t+Δt; then
+    refined: n̂(t+Δt) again with l from the ratio's own ρ, ``simulation.KERNEL_RATIO_PASSES``),
+
+so that over a run ρ_i/ρ_i(0) = n̂_i(t)/n̂_i(0) to O(Δt) per step: a function of where the
+particles are, not of how they got there. On a uniform line of spacing Δx (h ∝ l) n̂ is
+1/Δx times a constant, so behind the front ρ = m/Δx whatever the front did; the initial
+normalisation (free surfaces, the kernel's lattice sum) cancels in the ratio. It needs the
+neighbourhood to keep its particles, so it is the 1D default (particles keep their order);
+in 2D a pore that closes would bring new neighbours into n̂ and the ratio would read them as
+compression, so 2D keeps the continuity equation (``simulation.density_mode``).
 """
 
 from __future__ import annotations
@@ -45,7 +70,7 @@ import numpy as np
 from ..eos import eos_pc
 from ..numba_conf import njit, pjit, prange
 from ..strength.von_mises import radial_return
-from .kernel import dwdr, pair_h
+from .kernel import dwdr, pair_h, w
 from .riemann import contact
 
 # Columns of the packed per-particle array (real particles, then wall ghosts).
@@ -413,6 +438,96 @@ def update(
             and rho[i] < rho_max
         )
         bad += 0 if ok else 1
+    return bad
+
+
+@pjit
+def density_sum(
+    pk: np.ndarray,
+    n: int,
+    dim: int,
+    nbr: np.ndarray,
+    nnb: np.ndarray,
+    theta: float,
+    periodic: np.ndarray,
+    length: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Kernel sums n̂_i = W(0, 2θ l_i) + Σ_j W(r_ij, θ(l_i + l_j)) [1/m^dim] into ``out``
+    (rows 0..n−1; j over the list, wall ghosts included) from the positions and sizes l in
+    ``pk`` (module docstring, Density)."""
+    Lx = length[0] if periodic[0] else 0.0
+    Ly = length[1] if periodic[1] else 0.0
+    iLx = 1.0 / length[0] if periodic[0] else 0.0
+    iLy = 1.0 / length[1] if periodic[1] else 0.0
+    for i in prange(n):
+        xi = pk[i, PX]
+        yi = pk[i, PY]
+        li = pk[i, PL]
+        s = w(0.0, pair_h(li, li, theta), dim)
+        for k in range(nnb[i]):
+            j = nbr[i, k]
+            dx = pk[j, PX] - xi
+            dy = pk[j, PY] - yi
+            dx -= Lx * np.rint(dx * iLx)
+            dy -= Ly * np.rint(dy * iLy)
+            r = math.sqrt(dx * dx + dy * dy)
+            s += w(r, pair_h(li, pk[j, PL], theta), dim)
+        out[i] = s
+
+
+@njit
+def move_packed(
+    pk: np.ndarray,
+    x: np.ndarray,
+    l: np.ndarray,
+    src: np.ndarray,
+    side: np.ndarray,
+    walls: np.ndarray,
+) -> None:
+    """Positions x [m] and sizes l [m] into rows 0..n−1 of ``pk`` and into its ghost rows (the
+    mirrors of ``fill_ghosts`` in the walls at ``walls``), the other columns left as they are:
+    what ``density_sum`` reads, without the EOS calls of ``pack``."""
+    n = x.shape[0]
+    for i in range(n):
+        pk[i, PX] = x[i, 0]
+        pk[i, PY] = x[i, 1] if x.shape[1] == 2 else 0.0
+        pk[i, PL] = l[i]
+    for g in range(src.shape[0]):
+        i = src[g]
+        pk[n + g, PX] = 2.0 * walls[2 * side[g]] - pk[i, PX]
+        pk[n + g, PY] = pk[i, PY]
+        pk[n + g, PL] = l[i]
+
+
+@njit
+def kernel_ratio(rho_old: float, rhat_old: float, rhat_new: float) -> float:
+    """ρ(t+Δt) = ρ(t) n̂(t+Δt)/n̂(t) [kg/m³] (module docstring, Density)."""
+    return rho_old * rhat_new / rhat_old
+
+
+@pjit
+def rescale_density(
+    rho: np.ndarray,
+    l: np.ndarray,
+    m: np.ndarray,
+    rho_old: np.ndarray,
+    rhat_old: np.ndarray,
+    rhat_new: np.ndarray,
+    mobile: np.ndarray,
+    dim: int,
+    rho_max: float,
+) -> int:
+    """The ``kernel_ratio`` density [kg/m³] of every mobile particle into ``rho`` and its size
+    l = (m/ρ)^(1/dim) [m] into ``l``; returns the number of particles whose new ρ is not
+    finite or reaches rho_max."""
+    bad = 0
+    for i in prange(rho.shape[0]):
+        if mobile[i]:
+            r = kernel_ratio(rho_old[i], rhat_old[i], rhat_new[i])
+            rho[i] = r
+            l[i] = (m[i] / r) ** (1.0 / dim)
+            bad += 0 if (math.isfinite(r) and r < rho_max) else 1
     return bad
 
 

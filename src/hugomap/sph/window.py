@@ -149,7 +149,8 @@ class SPHWindow:
         w = CSPHSimulation(
             new, sim.eos, sim.strength, theta=sim.theta, cfl=sim.cfl, k_comp=sim.k_comp,
             walls=(wall - lo, u_out, None, 0.0), grad_correction=sim.grad_correction,
-            dev_mean=sim.dev_mean, skin=sim.skin, dt_floor=sim.dt_floor, escape_distance=sim.escape,
+            dev_mean=sim.dev_mean, density=sim.density_mode, skin=sim.skin,
+            dt_floor=sim.dt_floor, escape_distance=sim.escape,
         )  # fmt: skip
         w.dt = sim.dt  # the last step's Δt until the window takes its own (methods read it)
         w.frozen = frozen
@@ -487,7 +488,8 @@ class SPHWindow2D(SPHWindow):
             new, sim.eos, sim.strength, theta=sim.theta, cfl=sim.cfl, k_comp=sim.k_comp,
             walls=(wall - lo, u_out, None, 0.0), periodic=(False, True),
             lo=(0.0, float(sim.lo[1])), length=(1.0, float(sim.length[1])),
-            grad_correction=sim.grad_correction, dev_mean=sim.dev_mean, skin=sim.skin,
+            grad_correction=sim.grad_correction, dev_mean=sim.dev_mean,
+            density=sim.density_mode, skin=sim.skin,
             dt_floor=sim.dt_floor, escape_distance=sim.escape,
         )  # fmt: skip
         w.dt = sim.dt
