@@ -161,11 +161,15 @@ class MDBackend:
     # -- sample and checkpoints ------------------------------------------------------------
     def prepare(self, scene: dict) -> tuple[Any, Pole, dict[str, Any]]:
         """FCC at (ρ0, T0) (or the atoms of ``sample.data_file``, a LAMMPS data file) between
-        two static walls, thermostatted (CSVR) for
-        ``equilibrate_time``, then run without thermostat for ``pole_time`` while the pole is
-        measured away from the walls: ρ0, P0 = P_xx, E0, T0, P_yy0 (block averages with
-        standard errors)."""
-        from .sample import initial_state
+        two static walls, thermostatted (CSVR) for ``equilibrate_time`` while
+        ``md.sample.size_bulk`` sizes the box so that the bulk, ``WALL_LAYER`` from the walls,
+        is at ρ0 (a fluid: L_x = cells·a less the walls' excess layer, about 0.2 % for the
+        default liquid; a crystal keeps its lattice) and ends at the canonical mean energy of
+        T0; then run without thermostat for ``pole_time`` while the pole is measured away
+        from the walls: ρ0, P0 = P_xx, E0, T0, P_yy0 (block averages with standard errors).
+        The sample info is what ``size_bulk`` did (``length_x`` [σ], ``x_scale``, the bulk
+        density and energies it measured), for the record."""
+        from .sample import initial_state, size_bulk
         from .simulation import MDSimulation
 
         s = scene["sample"]
@@ -174,8 +178,14 @@ class MDBackend:
             state, lj(scene), s["dt"], T_bath=s["T0"], tau_bath=s["thermostat_tau"],
             seed=s["seed"],
         )  # fmt: skip
-        sim.advance(int(round(s["equilibrate_time"] / s["dt"])))
+        n_eq = int(round(s["equilibrate_time"] / s["dt"]))
+        info: dict[str, Any] = {}
+        if n_eq > 0:
+            info = size_bulk(sim, s["rho0"], s["T0"], n_eq, WALL_LAYER,
+                             resize=scene["phase"] != "crystal")  # fmt: skip
+            log.info("sample sized: %s", json.dumps(info))
         sim.T_bath = None
+        state = sim.state
         prof = MDProfile(_area(sim), scene["shock"]["bin_width"])
         every = 25
         nsamples = max(int(round(s["pole_time"] / (s["dt"] * every))), 16)
@@ -192,7 +202,7 @@ class MDBackend:
         pole = {}
         for k, name in keys.items():
             pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
-        return sim, Pole.from_dict(pole), {}
+        return sim, Pole.from_dict(pole), {"sizing": info}
 
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
         return solver.save(out, extra=extra, attrs=attrs)
