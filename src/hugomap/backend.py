@@ -75,7 +75,14 @@ class Backend(Protocol):
 
     def reference_inputs(self, scene: dict) -> dict | None:
         """What the reference depends on, when it is worth sharing between scenes (a run
-        of its own, e.g. equilibrium MD); None when each scene computes its own."""
+        of its own, e.g. equilibrium MD); None when each scene computes its own.
+
+        A backend may set ``reference_from_sample = True``: its reference is computed at
+        the pole its prepared sample measured. The reference stage then reads that
+        ``Pole`` from the scene's sample file and calls ``reference_inputs(scene, pole)``
+        and ``reference(scene, pole)``; ``reference_inputs(scene)`` without it (the
+        workflow's sharing key, known before any sample exists) must name every setting
+        that decides the sample."""
 
     def extras(self, solver: ShockSolver, out: Path, scene: dict, u_p: float, info: dict) -> None:
         """Write a piston run's extras beside its point file ``out`` (snapshots: the last

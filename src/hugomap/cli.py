@@ -63,6 +63,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--u-p", type=float, required=True)
     p = stage("reference", "the scene's reference Hugoniot (computed, or copied from a shared one)")
     p.add_argument("--shared", default=None, help="copy this reference made for the same inputs")
+    p.add_argument("--sample", default=None,
+                   help="the prepared sample whose measured pole the reference is computed at "
+                        "(backends with reference_from_sample: MD)")  # fmt: skip
     p = stage("window", "cut the moving window out of the loading checkpoint")
     p.add_argument("--loaded", required=True)
     p.add_argument("--u-p", type=float, required=True)
@@ -177,7 +180,7 @@ def main(argv: list[str] | None = None) -> int:
     elif args.cmd == "piston":
         stages.piston_point(args.loaded, _scene(args), args.u_p, args.out)
     elif args.cmd == "reference":
-        stages.reference_stage(_scene(args), args.out, args.shared)
+        stages.reference_stage(_scene(args), args.out, args.shared, args.sample)
     elif args.cmd == "window":
         stages.window_start(args.loaded, _scene(args), args.u_p, args.out)
     elif args.cmd in ("amw", "mw"):

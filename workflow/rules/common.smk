@@ -90,7 +90,9 @@ def stage_runtime(stage):
 
 
 # A reference that is a run of its own (equilibrium MD) is computed once per distinct set
-# of the inputs it depends on (Backend.reference_inputs) and copied into each scene's folder.
+# of the inputs it depends on (Backend.reference_inputs) and copied into each scene's folder;
+# an MD reference is computed at the pole its scene's sample measured, so both reference
+# rules read the sample file too.
 # Keys per scene (None where the backend computes its reference per scene) and, per key, the
 # first scene (config order) with those inputs: once, when the workflow is parsed.
 def _reference_keys():
@@ -110,6 +112,21 @@ def shared_reference_file(wildcards):
     """The shared reference a scene copies (none where computed per scene)."""
     key = REFERENCE_KEYS[wildcards.scene]
     return [] if key is None else [f"{RES}/references/{key}.nc"]
+
+
+def reference_sample_file(wildcards):
+    """The scene's sample file when its reference is computed at the pole the sample
+    measured (Backend.reference_from_sample: MD), else none."""
+    from hugomap.stages.reference import needs_sample
+
+    if needs_sample(config["scenes"][wildcards.scene]):
+        return [f"{RES}/{wildcards.scene}/sample.nc"]
+    return []
+
+
+def shared_reference_sample(wildcards):
+    """The sample of the scene whose reference the shared file is."""
+    return reference_sample_file(_reference_wildcards(wildcards))
 
 
 def _reference_wildcards(wildcards):

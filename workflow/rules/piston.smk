@@ -70,6 +70,8 @@ rule piston_point:
 
 
 rule shared_reference:
+    input:
+        sample=shared_reference_sample,
     output:
         f"{RES}/references/{{key}}.nc",
     log:
@@ -85,14 +87,18 @@ rule shared_reference:
     params:
         py=PY,
         inputs=shared_reference_json,
+        sample=lambda wildcards, input: (
+            f"--sample {input.sample}" if input.sample else ""
+        ),
     shell:
         "NUMBA_NUM_THREADS=1 {params.py} -m hugomap reference --scene-json {params.inputs:q}"
-        " --out {output} > {log} 2>&1"
+        " {params.sample} --out {output} > {log} 2>&1"
 
 
 rule reference:
     input:
-        shared_reference_file,
+        shared=shared_reference_file,
+        sample=reference_sample_file,
     output:
         f"{RES}/{{scene}}/reference.nc",
     log:
@@ -106,7 +112,13 @@ rule reference:
     params:
         py=PY,
         scene=scene_json,
-        shared=lambda wildcards, input: f"--shared {input[0]}" if input else "",
+        shared=lambda wildcards, input: (
+            f"--shared {input.shared}" if input.shared else ""
+        ),
+        sample=lambda wildcards, input: (
+            f"--sample {input.sample}" if input.sample else ""
+        ),
     shell:
         "NUMBA_NUM_THREADS=1 {params.py} -m hugomap reference --scene-name {wildcards.scene}"
-        " --scene-json {params.scene:q} {params.shared} --out {output} > {log} 2>&1"
+        " --scene-json {params.scene:q} {params.shared} {params.sample} --out {output}"
+        " > {log} 2>&1"

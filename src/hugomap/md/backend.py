@@ -161,11 +161,15 @@ class MDBackend:
     # -- sample and checkpoints ------------------------------------------------------------
     def prepare(self, scene: dict) -> tuple[Any, Pole, dict[str, Any]]:
         """FCC at (ρ0, T0) (or the atoms of ``sample.data_file``, a LAMMPS data file) between
-        two static walls, thermostatted (CSVR) for
-        ``equilibrate_time``, then run without thermostat for ``pole_time`` while the pole is
-        measured away from the walls: ρ0, P0 = P_xx, E0, T0, P_yy0 (block averages with
-        standard errors)."""
-        from .sample import initial_state
+        two static walls, thermostatted (CSVR) for ``equilibrate_time`` while
+        ``md.sample.size_bulk`` sizes the box so that the bulk, ``WALL_LAYER`` from the walls,
+        is at ρ0 (a fluid: L_x = cells·a less the walls' excess layer, about 0.2 % for the
+        default liquid; a crystal keeps its lattice) and ends at the canonical mean energy of
+        T0; then run without thermostat for ``pole_time`` while the pole is measured away
+        from the walls: ρ0, P0 = P_xx, E0, T0, P_yy0 (block averages with standard errors).
+        The sample info is what ``size_bulk`` did (``length_x`` [σ], ``x_scale``, the bulk
+        density and energies it measured), for the record."""
+        from .sample import initial_state, size_bulk
         from .simulation import MDSimulation
 
         s = scene["sample"]
@@ -174,8 +178,14 @@ class MDBackend:
             state, lj(scene), s["dt"], T_bath=s["T0"], tau_bath=s["thermostat_tau"],
             seed=s["seed"],
         )  # fmt: skip
-        sim.advance(int(round(s["equilibrate_time"] / s["dt"])))
+        n_eq = int(round(s["equilibrate_time"] / s["dt"]))
+        info: dict[str, Any] = {}
+        if n_eq > 0:
+            info = size_bulk(sim, s["rho0"], s["T0"], n_eq, WALL_LAYER,
+                             resize=scene["phase"] != "crystal")  # fmt: skip
+            log.info("sample sized: %s", json.dumps(info))
         sim.T_bath = None
+        state = sim.state
         prof = MDProfile(_area(sim), scene["shock"]["bin_width"])
         every = 25
         nsamples = max(int(round(s["pole_time"] / (s["dt"] * every))), 16)
@@ -192,7 +202,7 @@ class MDBackend:
         pole = {}
         for k, name in keys.items():
             pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
-        return sim, Pole.from_dict(pole), {}
+        return sim, Pole.from_dict(pole), {"sizing": info}
 
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
         return solver.save(out, extra=extra, attrs=attrs)
@@ -303,30 +313,79 @@ class MDBackend:
         return ControlParams.from_window(scene["window"], window.geom.length,
                                          scene["shock"]["gap"])  # fmt: skip
 
-    def reference_inputs(self, scene: dict) -> dict:
+    #: The reference is computed at the pole the prepared sample measured (``reference``).
+    reference_from_sample = True
+
+    def reference_inputs(self, scene: dict, pole: Pole | None = None) -> dict:
         """What the equilibrium reference depends on (``reference`` reads nothing else):
-        the potential block, the pole (``sample.rho0`` [σ⁻³], ``sample.T0`` [ε/k_B]), the
-        sample's seed and the ``reference`` block. Scenes that agree on these share one
-        computation."""
-        s = scene["sample"]
-        return {
+        the potential block, the pole it is computed at and the ``reference`` block. The
+        pole is the sample's measured one (``reference_pole``), so the inputs are what
+        makes the sample (``phase``, the whole ``sample`` block, the pole's bins
+        ``shock.bin_width``) and, once it is made, that pole (``pole``: ρ0 [σ⁻³], T0
+        [ε/k_B]). Scenes that agree on these share one computation; the workflow's key is
+        the part without the pole (known before any sample exists, and deciding it: the
+        preparation is deterministic), and a scene copies the shared file only when its
+        own sample measured the same pole."""
+        inputs = {
             "solver": "md",
             "potential": dict(scene["potential"]),
-            "sample": {"rho0": s["rho0"], "T0": s["T0"], "seed": s["seed"]},
+            "phase": scene["phase"],
+            "sample": dict(scene["sample"]),
+            "pole_bin_width": scene["shock"]["bin_width"],
             "reference": dict(scene["reference"]),
         }
+        if pole is not None:
+            inputs["pole"] = self.reference_pole(scene, pole)
+        return inputs
 
-    def reference(self, scene: dict) -> xr.Dataset:
-        """The equilibrium-MD Hugoniot of ``reference_inputs(scene)`` (``md.reference``)."""
+    def reference_pole(self, scene: dict, pole: Pole) -> dict[str, float]:
+        """The (ρ0 [σ⁻³], T0 [ε/k_B]) the reference is computed at, with their standard
+        errors: the sample's measured T0 and, for a fluid, its measured bulk ρ0. A crystal
+        keeps the lattice's ρ0 (``sample.rho0``; ``size_bulk`` does not resize it): its
+        atoms stay on their sites, so the bulk density is the lattice's exactly, while the
+        slab measurement counts whole bins against planes a/2 apart and is off by up to one
+        plane in the slab (+0.34 % on the default crystal)."""
+        fluid = scene["phase"] != "crystal"
+        return {
+            "rho0": float(pole.rho0) if fluid else float(scene["sample"]["rho0"]),
+            "rho0_err": float(pole.rho0_err) if fluid else 0.0,
+            "T0": float(pole.T0),
+            "T0_err": float(pole.T0_err),
+        }
+
+    def reference(self, scene: dict, pole: Pole | None = None) -> xr.Dataset:
+        """The equilibrium-MD Hugoniot (``md.reference``) of ``reference_inputs(scene,
+        pole)``: at the sample's measured pole (``reference_pole``), or without ``pole`` at
+        the requested ``sample.rho0``, ``sample.T0``. The pole it was computed at is stored
+        as the variables ``pole_rho0``, ``pole_T0`` (with ``_err``: the sample's standard
+        errors) beside the requested ``requested_rho0``, ``requested_T0``."""
         from .reference import reference_hugoniot
 
         s, r = scene["sample"], scene["reference"]
+        at = (
+            {"rho0": s["rho0"], "rho0_err": 0.0, "T0": s["T0"], "T0_err": 0.0}
+            if pole is None
+            else self.reference_pole(scene, pole)
+        )
         ds = reference_hugoniot(
-            s["rho0"], s["T0"], lj(scene),
+            at["rho0"], at["T0"], lj(scene),
             compressions=r["compressions"], cells=(r["cells"],) * 3, dt=r["dt"],
             n_equil=r["equilibrate_steps"], n_prod=r["production_steps"], seed=s["seed"],
         )  # fmt: skip
-        ds.attrs["reference_inputs"] = json.dumps(self.reference_inputs(scene), sort_keys=True)
+        u = {"rho0": "sigma^-3", "T0": "epsilon k_B^-1"}
+        names = {"rho0": "number density", "T0": "temperature"}
+        src = "requested" if pole is None else "the prepared sample's measured"
+        for k in ("rho0", "T0"):
+            ds[f"pole_{k}"] = ((), at[k], {"units": u[k], "long_name": f"pole {names[k]} the "
+                               f"reference is computed at ({src})"})  # fmt: skip
+            ds[f"pole_{k}_err"] = ((), at[k + "_err"], {"units": u[k], "long_name":
+                                   f"standard error of pole_{k} (the sample's)"})  # fmt: skip
+            ds[f"requested_{k}"] = ((), float(s[k]), {"units": u[k], "long_name":
+                                    f"requested pole {names[k]} (sample.{k})"})  # fmt: skip
+        ds.attrs["pole_source"] = "requested" if pole is None else "sample"
+        ds.attrs["reference_inputs"] = json.dumps(
+            self.reference_inputs(scene, pole), sort_keys=True
+        )
         return ds
 
     def extras(self, solver, out: Path, scene: dict, u_p: float, info: dict) -> None:

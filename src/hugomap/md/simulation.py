@@ -248,6 +248,24 @@ class MDSimulation:
         self._build_list(sort=True)
         ig.compute_forces(*self._force_args(), s.f)
 
+    def scale_x(self, factor: float) -> None:
+        """Stretch the box along x affinely by ``factor`` (dimensionless): x_i → factor·x_i,
+        L_x → factor·L_x, the walls at factor times their positions (static walls only);
+        velocities are kept. The list is rebuilt (sorted, on the new cell grid) and the
+        forces recomputed, so the next step is a plain velocity-Verlet step of the stretched
+        system. For a box closed in x by walls (``md.sample.size_bulk``)."""
+        s = self.state
+        if s.periodic[0] or s.walls0[1] != 0.0 or s.walls0[3] != 0.0:
+            raise ValueError("scale_x needs a box closed in x by two static walls")
+        if not factor > 0:
+            raise ValueError(f"factor = {factor}: must be > 0")
+        s.x[:, 0] *= factor
+        s.L[0] *= factor
+        s.walls0[[0, 2]] *= factor
+        self.nc = grid_shape(s.L, self.lj.rlist)
+        self._build_list(sort=True)
+        ig.compute_forces(*self._force_args(), s.f)
+
     def galilean_shift(self, du: float) -> None:
         """Add ``du`` [σ/τ] to every x velocity and to both wall velocities."""
         self.state.v[:, 0] += du
