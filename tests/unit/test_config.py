@@ -85,7 +85,7 @@ def test_copper_config_is_valid_and_filled() -> None:
     eos = solid["material"]["eos"]
     assert (eos["rho0"], eos["c0"], eos["s"], eos["gamma0"]) == (8930.0, 3940.0, 1.49, 2.0)
     assert solid["shock"]["bin_width"] == pytest.approx(2e-5)  # 2 dx, filled from sample.dx
-    assert solid["window"]["length"] == pytest.approx(2e-3)  # 200 dx (set)
+    assert solid["window"]["length"] == pytest.approx(2.4e-3)  # 240 dx (set)
     assert solid["window"]["cut_every"] == pytest.approx(1e-4)  # 10 dx, filled
     assert solid["schemes"] == ["piston", "amw", "mw", "dichotomy"]
     assert solid["window"]["dichotomy"]["half_width"] == 100.0  # m/s, schema default

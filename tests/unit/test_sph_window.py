@@ -49,7 +49,9 @@ def test_window_frame_and_boundaries():
     c = w.count_in_window()
     assert 0 < c <= w.n_particles
     sums = w.profile_sums(5 * DX)
-    assert sums.shape[0] == 6 and sums[:, 0].sum() == c
+    # the fractional count differs from the whole particles in the bins by the two edge
+    # particles' parts at most
+    assert sums.shape[0] == 6 and abs(sums[:, 0].sum() - c) <= 2.0
     w.galilean_shift(100.0)
     assert w.u_out - w.u_in == pytest.approx(UP) and w.sim.walls[1] == w.u_out
     w.set_outflow(w.u_out - 10.0)

@@ -107,7 +107,9 @@ def test_uniform_flow_conserves_count_and_mass():
         st = win.sim.state
         assert np.all(st.x[f, 0] >= win.geom.x_hi) and np.all(st.v[f, 0] == win.u_in)
         assert np.all(st.v[f, 1] == 0.0)
-    assert set(counts) == {2 * n_tile}
+    # the fractional count (each particle by the part of its extent inside) of two tile
+    # periods: constant to round-off while columns stream through and the wall is cut
+    assert np.allclose(counts, 2 * n_tile, rtol=0.0, atol=1e-9)
     assert win.mass_in > 0 and win.mass_out > 0 and win.n_updates >= 3
     m1 = float(np.sum(win.sim.state.m[~win.sim.frozen]))
     assert m1 == pytest.approx(m0 + win.mass_in - win.mass_out, rel=1e-12)
