@@ -115,6 +115,32 @@ def slab_state(
     return profile.state(sums[inside].sum(axis=0), nb)
 
 
+def slab_halves(
+    profile: Profile, sums: np.ndarray, edges: np.ndarray, x_lo: float, x_hi: float
+) -> tuple[SlabState, SlabState] | None:
+    """The states of the two halves (the far one first, then the near one: lower x, higher
+    x) of the whole bins inside [x_lo, x_hi]; None with fewer than 2 bins."""
+    idx = np.nonzero((edges[:-1] >= x_lo) & (edges[1:] <= x_hi))[0]
+    if idx.size < 2:
+        return None
+    h = idx.size // 2
+    return (profile.state(sums[idx[:h]].sum(axis=0), h),
+            profile.state(sums[idx[h:]].sum(axis=0), idx.size - h))  # fmt: skip
+
+
+def excess_spread(a: np.ndarray, b: np.ndarray, n_blocks: int = 8) -> float:
+    """Half the mean difference of two paired series beyond its noise:
+    ½ √max(0, Δ² − σ_Δ²), Δ the mean of b − a and σ_Δ its block-average error
+    (``stats.block_average``). Zero for two halves that agree within their noise; half
+    their difference for a deterministic solver's non-uniform slab or a drifting one."""
+    d = np.asarray(b, dtype=float) - np.asarray(a, dtype=float)
+    m, e = block_average(d, n_blocks)
+    if not np.isfinite(m):
+        return 0.0
+    e = e if np.isfinite(e) else 0.0
+    return 0.5 * float(np.sqrt(max(m * m - e * e, 0.0)))
+
+
 def bin_edges(profile: Profile, nbins: int) -> np.ndarray:
     """Bin edges x0 + k·width, k = 0..nbins."""
     return profile.x0 + np.arange(nbins + 1) * profile.bin_width
@@ -190,6 +216,9 @@ MIN_SLAB_BINS = 3  # a slab narrower than this many bins is not measured in that
 TWO_WAVE_SIGMAS = 5.0  # a precursor's P_xx jump must exceed this many standard errors…
 TWO_WAVE_FRACTION = 0.03  # …and this fraction of the main jump P − P0
 CLOSE_SIGMAS = 3.0  # an ok point's jump residuals are within this many of their errors
+# …or below this, whatever their errors: an exact model's residuals are rounding (1e-13),
+# and no Hugoniot is wanted to better than a part in a million
+RESIDUAL_FLOOR = 1e-6
 
 
 def residual_text(values: dict) -> str:
@@ -232,7 +261,9 @@ def measure_point(
         and then jumps; its standard error the larger of the least-squares slope's corrected
         for correlated samples (``stats.CorrelatedSlope``) and the slope's scatter over four
         spans (``stats.slope_scatter``: the wander); a window passes its L dω/dt as
-        ``front_speed`` (speed, error), and the tracked D is kept as ``D_front``;
+        ``front_speed`` (speed, error), and the tracked D is kept as ``D_front``; where the
+        two differ by more than their noise, half the excess is added to D's error (the
+        front model's);
       u_p = u_behind − u_ahead (set by the piston or the outflow), and the shocked slab's
         velocity relative to the upstream material as ``u_p_measured``. The slab's own flow
         in the frame that should hold it at rest, δu = u_p_measured − u_p, is acoustic motion
@@ -242,7 +273,12 @@ def measure_point(
         residuals and adds ρ0 D σ_flow (the momentum it carries) to P's error in quadrature
         (``P_flow_err`` keeps that part);
       every field of the slabs: block averages over the samples (``N_BLOCKS`` blocks) with
-        standard errors; the slab ahead as ``ahead_*`` (its u relative to the upstream).
+        standard errors, widened in quadrature by what is not noise: half the difference of
+        the slab's near and far halves (a slab that is not uniform: a relaxation zone, the
+        tail of a broad front) and of the first and second halves of the samples (a drift),
+        each only where it exceeds its own noise (``excess_spread``; a deterministic solver
+        has no noise, and its slab's gradient is then its error); the slab ahead as
+        ``ahead_*`` (its u relative to the upstream).
     Two waves: when the state ahead carries a P_xx jump from P0 larger than
     ``TWO_WAVE_SIGMAS`` of its error and ``TWO_WAVE_FRACTION`` of P − P0 (an elastic
     precursor), ``two_wave`` = 1 and the jump conditions are taken from that state instead of
@@ -250,8 +286,8 @@ def measure_point(
     (``jump_residual_errors``). Status: ``ok`` when D, u_p, ρ, P, E are finite, at least
     max(2 n_blocks, half the samples) have a slab behind the front and every residual
     closes: |r| ≤ ``residual_tol`` and |r| ≤ ``CLOSE_SIGMAS`` of its error (a residual of
-    0.8 % with an error of 0.1 % is a bias, not noise); ``not_converged`` when one does not;
-    else ``too_few_samples``. ``diagnostic`` says why a point is not ok.
+    0.8 % with an error of 0.1 % is a bias, not noise) or ≤ ``RESIDUAL_FLOOR``;
+    ``not_converged`` when one does not; else ``too_few_samples``. ``diagnostic`` says why a point is not ok.
     """
     t = np.asarray(h["t"], dtype=float)
     xf = np.asarray(h["front"], dtype=float)
@@ -264,21 +300,45 @@ def measure_point(
     lg = gap if left_gap is None else left_gap
     behind: list[SlabState | None] = []
     ahead: list[SlabState | None] = []
+    halves: dict[str, list] = {"behind": [], "ahead": []}  # (far, near) half-slab states
     for i in range(n):
-        st = sa = None
+        st = sa = hb = ha = None
         if np.isfinite(xf[i]):
             lo, hi = max(xl[i] + lg, xf[i] - gap - avg_length), xf[i] - gap
             if hi - lo >= min_len:
                 st = slab_state(profile, sums[i], edges, lo, hi)
+                hb = slab_halves(profile, sums[i], edges, lo, hi)
             a_lo, a_hi = xf[i] + gap, min(xr[i] - gap, xf[i] + gap + avg_length)
             if a_hi - a_lo >= min_len:
                 sa = slab_state(profile, sums[i], edges, a_lo, a_hi)
+                ha = slab_halves(profile, sums[i], edges, a_lo, a_hi)
         behind.append(st)
         ahead.append(sa)
+        halves["behind"].append(hb)
+        halves["ahead"].append(ha)
     keys = next((list(s) for s in behind + ahead if s is not None), ["rho", "u", "P", "E"])
 
     def series(states: list[SlabState | None], k: str) -> np.ndarray:
         return np.array([np.nan if s is None else s[k] for s in states], dtype=float)
+
+    def mean_err(side: str, k: str) -> tuple[float, float]:
+        """Block average of field k of one slab, its error widened by the slab's
+        non-uniformity (near half against far half) and drift (second half of the samples
+        against the first), each where it exceeds the noise (``excess_spread``)."""
+        states = behind if side == "behind" else ahead
+        y = series(states, k)
+        m, e = block_average(y, n_blocks)
+        pairs = [(np.nan, np.nan) if h is None else (h[0][k], h[1][k]) for h in halves[side]]
+        far, near = (
+            (np.array(c, dtype=float) for c in zip(*pairs, strict=True)) if pairs else (y, y)
+        )
+        ok = np.isfinite(far) & np.isfinite(near)
+        space = excess_spread(far[ok], near[ok], n_blocks) if ok.sum() >= 2 * n_blocks else 0.0
+        yf = y[np.isfinite(y)]
+        h = yf.size // 2
+        time_ = excess_spread(yf[:h], yf[yf.size - h :], n_blocks) if h >= n_blocks else 0.0
+        e = e if np.isfinite(e) else np.nan
+        return m, float(np.sqrt(e * e + space * space + time_ * time_))
 
     out: dict[str, float | str | bool] = {}
     tt, tx = (
@@ -292,20 +352,26 @@ def measure_point(
     if front_speed is not None:
         out["D_front"], out["D_front_err"] = D_w - u_ahead, float(D_w_err)
         D_w, D_w_err = front_speed
+        # the two front speeds (the tracked front, the window's mass balance) disagreeing
+        # beyond their noise is the front model's error
+        gap_D = D_w - (out["D_front"] + u_ahead)
+        noise = np.hypot(out["D_front_err"], D_w_err)
+        if np.isfinite(gap_D) and np.isfinite(noise) and abs(gap_D) > noise:
+            D_w_err = float(np.hypot(D_w_err, 0.5 * np.sqrt(gap_D**2 - noise**2)))
     D, D_err = float(D_w - u_ahead), float(D_w_err)
     u_p = float(u_behind - u_ahead)
     out["D"], out["D_err"] = D, D_err
     out["u_p"], out["u_p_err"] = u_p, 0.0
-    u_s, u_s_err = block_average(series(behind, "u"), n_blocks)
+    u_s, u_s_err = mean_err("behind", "u")
     out["u_p_measured"], out["u_p_measured_err"] = u_s - u_ahead, u_s_err
     for k in keys:
         if k == "u":
             continue
-        out[k], out[k + "_err"] = block_average(series(behind, k), n_blocks)
+        out[k], out[k + "_err"] = mean_err("behind", k)
     for k in keys:
         if k in ("T", "Pyy", "Pzz"):
             continue
-        out["ahead_" + k], out["ahead_" + k + "_err"] = block_average(series(ahead, k), n_blocks)
+        out["ahead_" + k], out["ahead_" + k + "_err"] = mean_err("ahead", k)
     out["ahead_u"] = out["ahead_u"] - u_ahead  # in the frame of the pole material
     rho, P, E = out["rho"], out["P"], out["E"]
     P0, P0_err = pole.P0, pole.P0_err
@@ -350,7 +416,8 @@ def measure_point(
     finite = all(np.isfinite(v) for v in (D, u_p, rho, P, E))
     enough = n_ok >= max(2 * n_blocks, n // 2)
     closes = all(
-        abs(v) <= residual_tol and abs(v) <= CLOSE_SIGMAS * res_err[k] for k, v in res.items()
+        abs(v) <= residual_tol and abs(v) <= max(CLOSE_SIGMAS * res_err[k], RESIDUAL_FLOOR)
+        for k, v in res.items()
     )
     converged = bool(finite and enough and closes)
     out["converged"] = converged

@@ -61,6 +61,12 @@ POINT_VARS: dict[str, tuple[str, str]] = {
     "ahead_E": ("epsilon", "specific internal energy just ahead of the tracked front"),
     "ahead_u": ("sigma tau^-1", "particle velocity just ahead of the tracked front"),
     "two_wave": ("1", "1 when an elastic precursor runs ahead of the tracked front"),
+    "u_p_flow_err": (
+        "sigma tau^-1",
+        "uncertainty of the jump from the shocked slab's own flow "
+        "(hypot(u_p_measured - u_p, its error))",
+    ),
+    "P_flow_err": (P_UNIT, "part of P_err from that flow: rho0 D u_p_flow_err"),
     "n_samples": ("1", "profile samples averaged"),
     "wall_s": ("s", "wall-clock time of the point (load + drive)"),
     "cpu_s": ("s", "CPU time of the point (load + drive), all threads"),
