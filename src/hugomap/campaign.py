@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .analysis.replicas import replica_cases
 from .campaign_expand import (  # noqa: F401 (re-exported: the campaign's public names)
     DEFAULT_NAME,
     SEP,
@@ -272,6 +273,9 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
     out = xr.Dataset(data, coords={"point": np.arange(n)})
     out = out.set_coords(["case", "study", "variant", "scheme", "scene"])
     out = out.merge(settings(out))
+    reps = replica_statistics(out, replica_cases(cfg["campaign"]))
+    if reps:
+        out.attrs["replicas"] = json.dumps(reps, sort_keys=True)
     out.attrs.update(
         Conventions="CF-1.11",  # written through io.dataset.cf_dataset
         title=f"hugomap validation campaign {campaign_name(cfg)}",
@@ -365,6 +369,27 @@ def _rms_error(e: np.ndarray, se: np.ndarray, rms: float) -> float:
     if rms == 0.0:
         return float(np.sqrt(np.mean(se**2)))
     return float(np.sqrt(np.sum((e * se) ** 2)) / (e.size * rms))
+
+
+def replica_statistics(ds: xr.Dataset, cases: Sequence[str]) -> dict:
+    """``analysis.replicas.replica_summary`` of each replica case's points, grouped by
+    scheme and u_p, for D and P (their relative errors against the reference, with the
+    combined errors): over the usable points (ok or not_converged) and over the ok ones."""
+    from .analysis.replicas import replica_summary
+
+    out = {}
+    for case in cases:
+        sel = ds["case"].values == case
+        for which, keep in (("usable", np.isin(ds["status"].values, USABLE)),
+                            ("ok", ds["status"].values == "ok")):  # fmt: skip
+            m = sel & keep
+            groups = [(str(a), round(float(b), 6)) for a, b in
+                      zip(ds["scheme"].values[m], ds["u_p_over_c0"].values[m], strict=True)]  # fmt: skip
+            vals = {q: (ds[f"err_{q}"].values[m], ds[f"err_{q}_err"].values[m]) for q in ("D", "P")}
+            out.setdefault(case, {})[which] = replica_summary(groups, vals)
+        out[case]["n_points"] = int(sel.sum())
+        out[case]["n_ok"] = int((sel & (ds["status"].values == "ok")).sum())
+    return out
 
 
 def write_campaign(cfg: Mapping, aggregates: Sequence[str | Path], out: str | Path) -> Path:

@@ -17,7 +17,7 @@ import logging
 import sys
 import textwrap
 
-USER_COMMANDS = ("check-config", "status", "export-lammps", "figures", "history")
+USER_COMMANDS = ("check-config", "status", "export-lammps", "figures", "history", "replicas")
 STAGE_COMMANDS = (
     "prepare", "load", "piston", "reference", "window", "amw", "mw", "dichotomy-state",
     "dichotomy-trial", "dichotomy-point", "aggregate", "campaign",
@@ -102,7 +102,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", required=True, help="the campaign dataset (netCDF)")
     p.add_argument("--chart", required=True, help="speed-accuracy chart (PNG)")
     p.add_argument("--map", required=True, help="stability map (PNG)")
+    p.add_argument("--pulls", help="every point's pull against its reference (PNG)")
     p.add_argument("aggregates", nargs="+", help="results/hugoniot/<scene>.nc of its scenes")
+    p = add("replicas", help="do the errors hold? a replica campaign's chi-square and pulls")
+    p.add_argument("campaign", help="results/campaign/<name>.nc of a replica study")
     p = add("history", help="history figure of one window point")
     p.add_argument("point")
     p.add_argument("--out", required=True)
@@ -206,7 +209,7 @@ def main(argv: list[str] | None = None) -> int:
 
         from .campaign import write_campaign
         from .config import validate_config
-        from .figures import speed_accuracy_figure, stability_map_figure
+        from .figures import pulls_figure, speed_accuracy_figure, stability_map_figure
 
         cfg = validate_config(json.loads(args.config_json))  # expands the campaign's scenes
         out = write_campaign(cfg, args.aggregates, args.out)
@@ -214,6 +217,24 @@ def main(argv: list[str] | None = None) -> int:
             ds = ds.load()
         speed_accuracy_figure(ds, args.chart)
         stability_map_figure(ds, args.map)
+        if args.pulls:
+            pulls_figure(ds, args.pulls)
+    elif args.cmd == "replicas":
+        import xarray as xr
+
+        with xr.open_dataset(args.campaign, engine="netcdf4") as ds:
+            reps = json.loads(ds.attrs.get("replicas", "{}"))
+        if not reps:
+            print(f"{args.campaign}: no replica study (a case whose resolutions set only "
+                  "sample.seed)", file=sys.stderr)  # fmt: skip
+            return 2
+        for case, r in reps.items():
+            for which in ("usable", "ok"):
+                s = r[which]
+                print(json.dumps({"case": case, "points": which, **{k: v for k, v in s.items()
+                                  if k != "groups"}}))  # fmt: skip
+                for g in s["groups"]:
+                    print(json.dumps({"case": case, "points": which, **g}))
     elif args.cmd == "history":
         from .figures import window_history_figure
 

@@ -345,3 +345,56 @@ def stability_map_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.9 / (3.4 * nrow)))
     fig.savefig(out, dpi=120)
     plt.close(fig)
+
+
+def pulls_figure(ds: xr.Dataset, out: str | os.PathLike) -> None:
+    """Every usable point's pull against its reference, z = (X/X_ref − 1)/σ (σ the combined
+    error ``err_X_err``), for D and for P, a row per case: x the point's u_p/c0 (schemes set
+    side by side), filled markers ok, open not_converged; bands at |z| ≤ 1 and 2. The
+    title gives the RMS pull and, for a replica study (the ``replicas`` attribute:
+    ``analysis.replicas``), the pooled reduced χ² of the replicas about their means."""
+    import json
+
+    reps = json.loads(ds.attrs.get("replicas", "{}"))
+    cases = list(dict.fromkeys(ds["case"].values))
+    fig, axes = plt.subplots(len(cases), 2, figsize=(10, 3.4 * len(cases)), squeeze=False)
+    schemes = list(SCHEME_MARKERS)
+    for r, case in enumerate(cases):
+        sel = ds["case"].values == case
+        status = ds["status"].values[sel]
+        x0 = ds["u_p_over_c0"].values[sel].astype(float)
+        span = np.ptp(x0) if x0.size > 1 and np.ptp(x0) > 0 else 1.0
+        for c, q in enumerate(("D", "P")):
+            ax = axes[r, c]
+            z = ds[f"err_{q}"].values[sel] / ds[f"err_{q}_err"].values[sel]
+            ax.axhspan(-2, 2, color="0.92", zorder=0)
+            ax.axhspan(-1, 1, color="0.82", zorder=0)
+            ax.axhline(0, color="k", lw=0.6)
+            for k, scheme in enumerate(schemes):
+                m = ds["scheme"].values[sel] == scheme
+                x = x0[m] + (k - 1.5) * 0.012 * span
+                for okm, face in (
+                    (status[m] == "ok", None),
+                    (status[m] == "not_converged", "none"),
+                ):
+                    ax.scatter(x[okm], z[m][okm], marker=SCHEME_MARKERS[scheme], s=40,
+                               facecolors=face, edgecolors="k" if face is None else "C0",
+                               color="C0", linewidths=0.8, zorder=3)  # fmt: skip
+            fin = np.isfinite(z)
+            rms = float(np.sqrt(np.mean(z[fin] ** 2))) if fin.any() else float("nan")
+            title = f"{case}: {q}, RMS pull {rms:.2f}"
+            u = reps.get(case, {}).get("usable", {})
+            if f"{q}_chi2_red" in u:
+                title += f", replicas' pooled χ²/ν {u[f'{q}_chi2_red']:.2f}"
+            ax.set_title(title, fontsize=9)
+            ax.set_xlabel("u_p / c0")
+            ax.set_ylabel(f"({q}/{q}_ref − 1) / σ")
+            ax.grid(True, alpha=0.25)
+    handles = [plt.Line2D([], [], marker=m, ls="", color="C0", markeredgecolor="k", label=s)
+               for s, m in SCHEME_MARKERS.items()]  # fmt: skip
+    handles.append(plt.Line2D([], [], marker="o", ls="", markerfacecolor="none",
+                              markeredgecolor="C0", label="not_converged"))  # fmt: skip
+    fig.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=8)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.5 / (3.4 * len(cases))))
+    fig.savefig(out, dpi=120)
+    plt.close(fig)

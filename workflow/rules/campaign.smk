@@ -1,6 +1,7 @@
 # The validation campaign (config key `campaign`, hugomap.campaign): its variants are
 # ordinary scenes (expanded before validation); this rule joins their aggregates into one
-# dataset and draws the speed-accuracy chart and the stability map. Target: `campaign`.
+# dataset and draws the speed-accuracy chart, the stability map and every point's pull
+# against its reference (with a replica study's chi-square). Target: `campaign`.
 
 
 rule campaign:
@@ -20,6 +21,12 @@ rule campaign:
             category="Validation campaign",
             labels={"figure": "stability map"},
         ),
+        pulls=report(
+            campaign_outputs()["pulls"],
+            caption="../report/pulls.rst",
+            category="Validation campaign",
+            labels={"figure": "pulls against the reference"},
+        ),
     log:
         f"{RES}/logs/campaign.log",
     conda:
@@ -36,4 +43,4 @@ rule campaign:
         ),
     shell:
         "{params.py} -m hugomap campaign --config-json {params.config:q} --out {output.nc}"
-        " --chart {output.chart} --map {output.map} {input} > {log} 2>&1"
+        " --chart {output.chart} --map {output.map} --pulls {output.pulls} {input} > {log} 2>&1"

@@ -217,10 +217,11 @@ def campaign_aggregates(wildcards):
 
 
 def campaign_outputs():
-    """The campaign dataset and its two figures, named by campaign.name."""
+    """The campaign dataset and its three figures, named by campaign.name."""
     name = config.get("campaign", {}).get("name", "validation")
     return {
         "nc": f"{RES}/campaign/{name}.nc",
         "chart": f"{RES}/campaign/{name}_speed_accuracy.png",
         "map": f"{RES}/campaign/{name}_stability.png",
+        "pulls": f"{RES}/campaign/{name}_pulls.png",
     }
