@@ -180,6 +180,17 @@ def _diverging(h: ControlHistory, z: float, floor: float = 0.0) -> tuple[str, st
     return None
 
 
+def flat_omega_error(signal: OmegaSignal, t: np.ndarray, w: np.ndarray, se: float) -> float:
+    """The slope error of an ω that never changed over ``t`` (the front moved less than one
+    particle's worth, L/|q_sh − q_up|): that quantum's, std quantum/√6 over the span (two
+    ends uniform within it), instead of the fit's 0; ``se`` otherwise. A flat ω carries no
+    information that the front is still, only that it moved less than the quantum."""
+    if signal.kind == "N" and np.size(w) and np.ptp(w) == 0:
+        quantum = 1.0 / abs(signal.q_sh - signal.q_up)  # in ω
+        return float(quantum / (np.sqrt(6.0) * max(float(t[-1] - t[0]), 1e-300)))
+    return float(se)
+
+
 def _control(
     solver,
     signal: OmegaSignal,
@@ -216,6 +227,7 @@ def _control(
     for k in range(max_windows):
         t, w = sample_omega(solver, signal, window_time, every)
         a, se, _ = slopes.fit(t, w)
+        se = flat_omega_error(signal, t, w, se)
         bad = _check_inside(w, edge_margin)
         if bad:
             _record(h, solver, t, w, a, se, 0.0)

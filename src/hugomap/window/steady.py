@@ -18,7 +18,7 @@ import numpy as np
 from ..analysis.shock import bin_edges, measure_point, track_front
 from ..analysis.stats import CorrelatedSlope, slope_scatter
 from ..states import Pole, Profile
-from .methods import OmegaSignal
+from .methods import OmegaSignal, flat_omega_error
 from .protocol import WindowSolver
 
 
@@ -57,9 +57,7 @@ def steady_state(
     wander = slope_scatter(t_a, om)  # ω wanders with the front (analysis.shock.measure_point)
     if np.isfinite(wander):
         se = max(float(se), wander)
-    if np.ptp(om) == 0 and signal.kind == "N":
-        quantum = 1.0 / abs(signal.q_sh - signal.q_up)  # in ω
-        se = quantum / (np.sqrt(6.0) * max(t_a[-1] - t_a[0], 1e-300))
+    se = flat_omega_error(signal, t_a, om, se)
     h = {
         "t": t_a, "front": np.asarray(front), "stage": np.ones(n, dtype=np.int8),
         "x_left": np.full(n, g.x_lo), "x_right": np.full(n, g.x_hi),
