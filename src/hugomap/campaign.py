@@ -215,6 +215,9 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
                                                      ds["u_p"].attrs.get("units", ""))),
             "reference": _reference_name(ds),
         })  # fmt: skip
+        # one c0 per case (its first variant's): a variant with its own reference (another
+        # seed, another pole) must not move the case's u_p/c0 axis
+        c0 = cases[v.case]["c0"]
         st = cfg["campaign"]["cases"][v.case].get("stability")
         if st:
             cases[v.case]["stability_variant"] = st["resolution"]
