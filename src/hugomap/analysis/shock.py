@@ -216,9 +216,12 @@ MIN_SLAB_BINS = 3  # a slab narrower than this many bins is not measured in that
 TWO_WAVE_SIGMAS = 5.0  # a precursor's P_xx jump must exceed this many standard errors…
 TWO_WAVE_FRACTION = 0.03  # …and this fraction of the main jump P − P0
 CLOSE_SIGMAS = 3.0  # an ok point's jump residuals are within this many of their errors
-# …or below this, whatever their errors: an exact model's residuals are rounding (1e-13),
-# and no Hugoniot is wanted to better than a part in a million
-RESIDUAL_FLOOR = 1e-6
+# …or below this, whatever their errors: 0.01 % is below any Hugoniot's accuracy (the best
+# measured ones hold to ~0.1 %) and about a deterministic solver's own discretisation error
+# (CSPH copper at the default dx, 2000 m/s: mass 1e-5, energy 3.4e-5 of residual, its slab
+# uniform to 1e-7, so a 3-error test alone would call that point a bias); an exact model's
+# residuals are rounding (1e-13)
+RESIDUAL_FLOOR = 1e-4
 
 
 def residual_text(values: dict) -> str:
