@@ -179,12 +179,13 @@ def test_copper_config_is_valid_and_filled() -> None:
             "scenes.cu_solid.window.dichotomy.trial_time = 2.0: out of range; allowed range "
             "(0.0, 1.0]",
         ),
-        (  # the slab behind the front (2 gap + avg_length = 0.8 mm) must fit behind it
+        (  # the slab behind the front (gap + outflow_gap + avg_length = 0.8 mm) must fit
             "cu_solid",
-            lambda s: s["window"].update(front_fraction=0.35),
-            "scenes.cu_solid.window.front_fraction = 0.35: the front starts 0.0007 m from the "
-            "outflow edge of window.length = 0.002 m, less than the averaged slab behind it "
-            "needs, 2 shock.gap + shock.avg_length = 0.0008 m; allowed range [0.4, 0.8]",
+            lambda s: s["window"].update(front_fraction=0.3),
+            "scenes.cu_solid.window.front_fraction = 0.3: the front starts 0.00072 m from the "
+            "outflow edge of window.length = 0.0024 m, less than the averaged slab behind it "
+            "needs, shock.gap + window.outflow_gap + shock.avg_length = 0.0008 m; allowed "
+            "range [0.3333, 0.8] (or a longer window)",
         ),
         (
             "cu_solid",
@@ -239,7 +240,7 @@ def test_validation_resolves_every_default() -> None:
     cfg = load_config(ROOT / "config/copper.yaml")
     solid = cfg["scenes"]["cu_solid"]
     dx = solid["sample"]["dx"]
-    assert solid["shock"]["gap"] == pytest.approx(3e-4)  # set
+    assert solid["shock"]["gap"] == pytest.approx(5e-4)  # set
     assert solid["window"]["cut_every"] == pytest.approx(10 * dx)
     porous = cfg["scenes"]["cu_porous"]
     assert porous["window"]["dichotomy"]["trial_time"] is None  # derived per point
