@@ -71,6 +71,7 @@ from ..eos import eos_pc
 from ..numba_conf import njit, pjit, prange
 from ..strength.von_mises import radial_return
 from .kernel import dwdr, pair_h, w
+from .neighbors import image_lengths, min_image
 from .riemann import contact
 
 # Columns of the packed per-particle array (real particles, then wall ghosts).
@@ -166,10 +167,7 @@ def correction(
     """B_i = M_i⁻¹ into pk[:n, PBXX:PBYY+1], M_i^{ab} = −Σ_j (m_j/ρ_j) r_ij e^a e^b W'_ij
     (module docstring); B = I where the correction is off or M is near-singular (det M < 1e-3,
     a particle with almost no neighbours; M ≈ I in the bulk)."""
-    Lx = length[0] if periodic[0] else 0.0
-    Ly = length[1] if periodic[1] else 0.0
-    iLx = 1.0 / length[0] if periodic[0] else 0.0
-    iLy = 1.0 / length[1] if periodic[1] else 0.0
+    Lx, Ly, iLx, iLy = image_lengths(periodic, length)
     for i in prange(n):
         bxx = 1.0
         bxy = 0.0
@@ -185,8 +183,8 @@ def correction(
                 j = nbr[i, k]
                 dx = pk[j, PX] - xi
                 dy = pk[j, PY] - yi
-                dx -= Lx * np.rint(dx * iLx)
-                dy -= Ly * np.rint(dy * iLy)
+                dx = min_image(dx, Lx, iLx)
+                dy = min_image(dy, Ly, iLy)
                 r2 = dx * dx + dy * dy
                 r = math.sqrt(r2)
                 wp = dwdr(r, pair_h(li, pk[j, PL], theta), dim)
@@ -226,10 +224,7 @@ def pair_rates(
 
     μ̇ = tr(L B) always uses the contact velocity U*. ``dev_mean``: the L columns (which
     drive dS/dt and ω) use the mean velocity ½(v_i + v_j) instead of U* (module docstring)."""
-    Lx = length[0] if periodic[0] else 0.0
-    Ly = length[1] if periodic[1] else 0.0
-    iLx = 1.0 / length[0] if periodic[0] else 0.0
-    iLy = 1.0 / length[1] if periodic[1] else 0.0
+    Lx, Ly, iLx, iLy = image_lengths(periodic, length)
     for i in prange(n):
         xi = pk[i, PX]
         yi = pk[i, PY]
@@ -257,8 +252,8 @@ def pair_rates(
             j = nbr[i, k]
             dx = pk[j, PX] - xi
             dy = pk[j, PY] - yi
-            dx -= Lx * np.rint(dx * iLx)
-            dy -= Ly * np.rint(dy * iLy)
+            dx = min_image(dx, Lx, iLx)
+            dy = min_image(dy, Ly, iLy)
             r = math.sqrt(dx * dx + dy * dy)
             ir = 1.0 / r
             ex = dx * ir
@@ -456,10 +451,7 @@ def density_sum(
     """Kernel sums n̂_i = W(0, 2θ l_i) + Σ_j W(r_ij, θ(l_i + l_j)) [1/m^dim] into ``out``
     (rows 0..n−1; j over the list, wall ghosts included) from the positions and sizes l in
     ``pk`` (module docstring, Density)."""
-    Lx = length[0] if periodic[0] else 0.0
-    Ly = length[1] if periodic[1] else 0.0
-    iLx = 1.0 / length[0] if periodic[0] else 0.0
-    iLy = 1.0 / length[1] if periodic[1] else 0.0
+    Lx, Ly, iLx, iLy = image_lengths(periodic, length)
     for i in prange(n):
         xi = pk[i, PX]
         yi = pk[i, PY]
@@ -469,8 +461,8 @@ def density_sum(
             j = nbr[i, k]
             dx = pk[j, PX] - xi
             dy = pk[j, PY] - yi
-            dx -= Lx * np.rint(dx * iLx)
-            dy -= Ly * np.rint(dy * iLy)
+            dx = min_image(dx, Lx, iLx)
+            dy = min_image(dy, Ly, iLy)
             r = math.sqrt(dx * dx + dy * dy)
             s += w(r, pair_h(li, pk[j, PL], theta), dim)
         out[i] = s

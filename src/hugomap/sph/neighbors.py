@@ -18,6 +18,24 @@ from ..numba_conf import njit, pjit, prange
 
 
 @njit
+def image_lengths(periodic: np.ndarray, length: np.ndarray) -> tuple[float, float, float, float]:
+    """(L_x, L_y, 1/L_x, 1/L_y) [m, 1/m] of the periodic dimensions, 0 along open ones, for
+    ``min_image``."""
+    Lx = length[0] if periodic[0] else 0.0
+    Ly = length[1] if periodic[1] else 0.0
+    iLx = 1.0 / length[0] if periodic[0] else 0.0
+    iLy = 1.0 / length[1] if periodic[1] else 0.0
+    return Lx, Ly, iLx, iLy
+
+
+@njit
+def min_image(d: float, L: float, iL: float) -> float:
+    """The minimum image d − L·rint(d/L) of a separation d [m] along a dimension of period L
+    (``image_lengths``: L = 1/L = 0 along an open one leaves d as it is)."""
+    return d - L * np.rint(d * iL)
+
+
+@njit
 def cell_grid(
     x: np.ndarray, side: float, periodic: np.ndarray, lo: np.ndarray, length: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -96,10 +114,7 @@ def build_list(
     width = nbr.shape[1]
     nx = nc[0]
     ny = nc[1]
-    Lx = length[0] if periodic[0] else 0.0
-    Ly = length[1] if periodic[1] else 0.0
-    iLx = 1.0 / length[0] if periodic[0] else 0.0
-    iLy = 1.0 / length[1] if periodic[1] else 0.0
+    Lx, Ly, iLx, iLy = image_lengths(periodic, length)
     need = 0
     for i in prange(n_rows):
         xi = x[i, 0]
@@ -128,8 +143,8 @@ def build_list(
                     j = order[k]
                     dx = x[j, 0] - xi
                     dy = x[j, 1] - yi
-                    dx -= Lx * np.rint(dx * iLx)
-                    dy -= Ly * np.rint(dy * iLy)
+                    dx = min_image(dx, Lx, iLx)
+                    dy = min_image(dy, Ly, iLy)
                     if dx * dx + dy * dy < rlist2 and j != i:
                         if count < width:
                             nbr[i, count] = j
