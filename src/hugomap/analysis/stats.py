@@ -28,13 +28,18 @@ def block_average(series: np.ndarray, n_blocks: int = 8) -> tuple[float, float]:
     return float(y.mean()), float(blocks.std(ddof=1) / np.sqrt(nb))
 
 
-def line_fit(t: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
-    """Least-squares y = a t + b: returns (a, b, se_a, se_b) with ordinary standard errors
-    from the residual variance (a lower bound when residuals are correlated)."""
+def finite_pairs(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(t, y) as float arrays, keeping the samples where both are finite."""
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     ok = np.isfinite(t) & np.isfinite(y)
-    t, y = t[ok], y[ok]
+    return t[ok], y[ok]
+
+
+def line_fit(t: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
+    """Least-squares y = a t + b: returns (a, b, se_a, se_b) with ordinary standard errors
+    from the residual variance (a lower bound when residuals are correlated)."""
+    t, y = finite_pairs(t, y)
     n = t.size
     if n < 3:
         return float("nan"), float("nan"), float("nan"), float("nan")
@@ -96,13 +101,11 @@ class CorrelatedSlope:
 
     def fit(self, t: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
         """Slope a, its corrected standard error and the pooled ρ used: (a, se_a, ρ)."""
-        t = np.asarray(t, dtype=float)
-        y = np.asarray(y, dtype=float)
+        t, y = finite_pairs(t, y)
         a, b, se, _ = line_fit(t, y)
         if not np.isfinite(se):
             return a, se, float("nan")
-        ok = np.isfinite(t) & np.isfinite(y)
-        r = y[ok] - a * t[ok] - b
+        r = y - a * t - b
         self.lag1 += float(np.sum(r[1:] * r[:-1]))
         self.sq += float(np.sum(r * r))
         self.n = r.size
@@ -121,10 +124,7 @@ def slope_scatter(t: np.ndarray, y: np.ndarray, n_sub: int = 4) -> float:
     the whole span was 3-5 times smaller than the scatter over seeds). For a random-walk
     wander (white front-speed noise) the mean slope over the spans is the whole span's, and
     its error is this; for white noise on y it errs high by about n_sub."""
-    t = np.asarray(t, dtype=float)
-    y = np.asarray(y, dtype=float)
-    ok = np.isfinite(t) & np.isfinite(y)
-    t, y = t[ok], y[ok]
+    t, y = finite_pairs(t, y)
     if t.size < 8:
         return float("nan")
     cuts = np.linspace(t.min(), t.max(), n_sub + 1)
@@ -145,10 +145,7 @@ def robust_slope(t: np.ndarray, y: np.ndarray, min_separation: float = 0.25) -> 
     A front tracker that now and then jumps by a few σ (a weak, broad front; the foot or the
     top of a two-wave profile) shifts a least-squares slope by a few %; the median ignores
     such samples. NaN samples are dropped; NaN if fewer than 3 remain."""
-    t = np.asarray(t, dtype=float)
-    y = np.asarray(y, dtype=float)
-    ok = np.isfinite(t) & np.isfinite(y)
-    t, y = t[ok], y[ok]
+    t, y = finite_pairs(t, y)
     if t.size < 3:
         return float("nan")
     i, j = np.triu_indices(t.size, k=1)
