@@ -59,30 +59,27 @@ def replica_summary(
     "<q>_n"}."""
     labels = sorted(set(groups))
     idx = {g: [i for i, x in enumerate(groups) if x == g] for g in labels}
-    out: dict = {"groups": []}
+    out: dict = {}
+    rows: dict = {g: {"label": list(g), "n": len(idx[g])} for g in labels}
     for q, (e_all, s_all) in values.items():
         e_all, s_all = np.asarray(e_all, float), np.asarray(s_all, float)
         chi, dof = 0.0, 0
-        ok = np.isfinite(e_all) & np.isfinite(s_all) & (s_all > 0)
         for g in labels:
-            c, k, _ = group_chi2(e_all[idx[g]], s_all[idx[g]])
+            e, s = e_all[idx[g]], s_all[idx[g]]
+            c, k, _ = group_chi2(e, s)
             if k:
                 chi, dof = chi + c, dof + k
-        out[f"{q}_chi2_red"] = chi / dof if dof else float("nan")
-        z = e_all[ok] / s_all[ok]
-        out[f"{q}_pull_rms"] = float(np.sqrt(np.mean(z**2))) if z.size else float("nan")
-        out[f"{q}_n"] = int(z.size)
-    for g in labels:
-        row: dict = {"label": list(g), "n": len(idx[g])}
-        for q, (e_all, s_all) in values.items():
-            e, s = np.asarray(e_all, float)[idx[g]], np.asarray(s_all, float)[idx[g]]
             ok = np.isfinite(e) & np.isfinite(s)
-            c, k, _ = group_chi2(e, s)
-            row[q] = {
+            rows[g][q] = {
                 "mean": float(np.mean(e[ok])) if ok.any() else float("nan"),
                 "sd": float(np.std(e[ok], ddof=1)) if ok.sum() > 1 else float("nan"),
                 "mean_err": float(np.mean(s[ok])) if ok.any() else float("nan"),
                 "chi2_red": c / k if k else float("nan"),
             }
-        out["groups"].append(row)
+        out[f"{q}_chi2_red"] = chi / dof if dof else float("nan")
+        ok = np.isfinite(e_all) & np.isfinite(s_all) & (s_all > 0)
+        z = e_all[ok] / s_all[ok]
+        out[f"{q}_pull_rms"] = float(np.sqrt(np.mean(z**2))) if z.size else float("nan")
+        out[f"{q}_n"] = int(z.size)
+    out["groups"] = [rows[g] for g in labels]
     return out
