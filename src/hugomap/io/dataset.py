@@ -56,6 +56,10 @@ POINT_VARS: dict[str, tuple[str, str]] = {
     "residual_mass": ("1", "relative residual of rho1 (D - u1) = rho (D - u_p)"),
     "residual_momentum": ("1", "relative residual of P - P1 = rho1 (D - u1)(u_p - u1)"),
     "residual_energy": ("1", "relative residual of E - E1 = (P + P1)(V1 - V)/2"),
+    "residual_flow": (
+        "1",
+        "the shocked slab's flow relative to the boundary behind it, (u_p_measured - u_p)/u_p",
+    ),
     "ahead_rho": ("sigma^-3", "number density just ahead of the tracked front"),
     "ahead_P": (P_UNIT, "P_xx just ahead of the tracked front (P0 unless a precursor runs)"),
     "ahead_E": ("epsilon", "specific internal energy just ahead of the tracked front"),
@@ -85,7 +89,8 @@ ERR_SUFFIX = "_err"
 # aggregate has the same layout whichever points failed (a scene whose every point failed
 # still has D_err).
 ALWAYS_WITH_ERR = ("D", "u_p_measured", "rho", "V", "P", "E", "E_minus_E0",
-                   "residual_mass", "residual_momentum", "residual_energy")  # fmt: skip
+                   "residual_mass", "residual_momentum", "residual_energy",
+                   "residual_flow")  # fmt: skip
 
 # -- unit tables ---------------------------------------------------------------------------
 # The tables above are in Lennard-Jones reduced units (written to files as units = "1" with
