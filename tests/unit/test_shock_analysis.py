@@ -86,10 +86,11 @@ class _ToyProfile:
         return SlabState(rho=m[2], u=m[1], P=m[3], Pyy=m[3], Pzz=m[3], E=m[4])
 
 
-def _toy_run(P_bias: float, noise: float, wander: float = 0.0, seed: int = 3):
+def _toy_run(P_bias: float, noise: float, wander: float = 0.0, seed: int = 3, flow: float = 0.0):
     """Samples of a steady front at D into the pole (ρ0 1, P0 1, E0 0) at rest, u_p 1, the
     state behind exact except P × (1 + P_bias), every field with white noise of relative
-    size ``noise``; the front position may wander by ``wander`` (one sine over the run)."""
+    size ``noise``; the front position may wander by ``wander`` (one sine over the run); the
+    slab behind may flow at ``flow`` relative to the boundary behind it (u = u_p + flow)."""
     from hugomap.states import Pole
 
     rng = np.random.default_rng(seed)
@@ -102,7 +103,7 @@ def _toy_run(P_bias: float, noise: float, wander: float = 0.0, seed: int = 3):
     for i, x in enumerate(xf):
         behind = (edges[1:] <= x)[:, None]
         ahead_state = np.array([30.0, 0.0, 1.0, 1.0, 0.0])
-        behind_state = np.array([30.0, u_p, rho, P * (1 + P_bias), E])
+        behind_state = np.array([30.0, u_p + flow, rho, P * (1 + P_bias), E])
         s = np.where(behind, behind_state, ahead_state)
         s[:, 2:] *= 1 + noise * rng.standard_normal((100, 3))
         s[:, 1] += noise * rng.standard_normal(100)
@@ -145,3 +146,36 @@ def test_front_speed_error_covers_a_slow_wander():
     assert dev > 0.02
     assert CorrelatedSlope().fit(h["t"], h["front"])[1] < 0.5 * dev
     assert r["D_err"] >= dev
+
+
+def test_a_slab_that_still_flows_is_not_ok_and_the_point_says_why():
+    """The state behind exact, but the slab moves at 0.98 u_p relative to the piston (as the
+    default 80-cell LJ piston's did at u_p = 1, its slab in the weak front's relaxation
+    tail): the three jump residuals close, the flow residual (−2 %, 40 errors) does not, and
+    the diagnostic names the cause. A flow below RESIDUAL_FLOOR (5e-5) closes."""
+    from hugomap.analysis.shock import measure_point
+
+    h, pole = _toy_run(0.0, 0.0005, flow=-0.02)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                      residual_tol=0.01)  # fmt: skip
+    assert r["residual_flow"] == pytest.approx(-0.02, abs=1e-3)
+    assert all(abs(r[f"residual_{k}"]) < 1e-3 for k in ("mass", "momentum", "energy"))
+    assert r["status"] == "not_converged"
+    assert "not at rest behind the front" in r["diagnostic"]
+    h, pole = _toy_run(0.0, 0.0005, flow=-5e-5)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                      residual_tol=0.01)  # fmt: skip
+    assert r["status"] == "ok", r["diagnostic"]
+
+
+def test_partial_compaction_is_named_beyond_its_tolerance_and_errors():
+    """A porous slab's distention: 1.05 ± 0.002 is partial compaction (named); 1.003 (below
+    COMPACTION_TOL) and 1.02 ± 0.01 (within 3 errors) are not; a solid slab has none."""
+    from hugomap.analysis.shock import named_causes
+
+    base = {"residual_flow": 0.0, "residual_flow_err": 0.001}
+    assert any("partial compaction" in c
+               for c in named_causes({**base, "alpha": 1.05, "alpha_err": 0.002}, 0.01))  # fmt: skip
+    assert named_causes({**base, "alpha": 1.003, "alpha_err": 0.0}, 0.01) == []
+    assert named_causes({**base, "alpha": 1.02, "alpha_err": 0.01}, 0.01) == []
+    assert named_causes(base, 0.01) == []
