@@ -264,7 +264,7 @@ def named_causes(values: dict, residual_tol: float) -> list[str]:
     r, e = values.get("residual_flow", np.nan), values.get("residual_flow_err", np.nan)
     if np.isfinite(r) and not _closes(r, e, residual_tol):
         out.append(
-            f"the shocked slab is not at rest behind the front: it moves at "
+            f"slab not at rest: it moves at "
             f"{values['u_p_measured'] - values['u_p']:+.3g} ± {values['u_p_measured_err']:.2g} "
             f"relative to the boundary behind it (u_p_measured {values['u_p_measured']:.5g}); "
             "a weak front's relaxation tail or ringing between that boundary and the front: "
@@ -484,12 +484,13 @@ def measure_point(
         )
     else:
         out["status"] = "ok" if converged else "not_converged"
+        # the measured causes first: a status table shows the diagnostic's start
         causes = named_causes({**out, "u_p": u_p}, residual_tol)
         out["diagnostic"] = (
             ""
             if converged
-            else f"{residual_text(out)}; ok needs each within shock.residual_tol = "
+            else "".join(f"{c}; " for c in causes)
+            + f"{residual_text(out)}; ok needs each within shock.residual_tol = "
             f"{residual_tol:.3g} and {CLOSE_SIGMAS:g} of its error"
-            + "".join(f"; {c}" for c in causes)
         )
     return out
