@@ -179,3 +179,21 @@ def test_partial_compaction_is_named_beyond_its_tolerance_and_errors():
     assert named_causes({**base, "alpha": 1.003, "alpha_err": 0.0}, 0.01) == []
     assert named_causes({**base, "alpha": 1.02, "alpha_err": 0.01}, 0.01) == []
     assert named_causes(base, 0.01) == []
+
+
+def test_a_slab_not_uniform_or_not_steady_beyond_tolerance_is_named():
+    """Near/far-half and late/early differences beyond noise (``spread``) above
+    residual_tol of the jump are named, the worst field with it; below it nothing is."""
+    from hugomap.analysis.shock import named_causes
+    from hugomap.states import Pole
+
+    pole = Pole(rho0=1.0, P0=1.0, E0=0.0, T0=1.0, Pyy0=1.0, rho0_err=0.0, P0_err=0.0,
+                E0_err=0.0, T0_err=0.0, Pyy0_err=0.0)  # fmt: skip
+    v = {"rho": 1.5, "P": 4.0, "E": 0.5, "residual_flow": 0.0, "residual_flow_err": 0.01}
+    # jumps: rho 0.5, P 3, E 0.5; E's halves differ by 0.02 = 4 % of its jump
+    causes = named_causes(v, 0.01, {"rho": (0.001, 0.0), "P": (0.0, 0.0), "E": (0.02, 0.0)}, pole)
+    assert len(causes) == 1 and causes[0].startswith("slab not uniform")
+    assert "4.00% of the jump in E" in causes[0]
+    causes = named_causes(v, 0.01, {"rho": (0.0, 0.01), "P": (0.0, 0.0), "E": (0.0, 0.0)}, pole)
+    assert len(causes) == 1 and causes[0].startswith("slab not steady")
+    assert named_causes(v, 0.01, {"rho": (0.004, 0.004), "P": (0.02, 0.0)}, pole) == []

@@ -248,7 +248,12 @@ def _closes(r: float, err: float, tol: float) -> bool:
     return bool(abs(r) <= tol and abs(r) <= max(CLOSE_SIGMAS * err, RESIDUAL_FLOOR))
 
 
-def named_causes(values: dict, residual_tol: float) -> list[str]:
+def named_causes(
+    values: dict,
+    residual_tol: float,
+    spread: dict[str, tuple[float, float]] | None = None,
+    pole: Pole | None = None,
+) -> list[str]:
     """Physical causes, measured on the point, that keep its slab from being the steady
     shocked state the jump conditions describe:
     - the slab still flows relative to the boundary behind it (``residual_flow`` does not
@@ -259,8 +264,29 @@ def named_causes(values: dict, residual_tol: float) -> list[str]:
       is 1.4 % below the Rayleigh line);
     - a porous slab not fully compacted: its distention ``alpha`` above 1 by more than
       ``COMPACTION_TOL`` and 3 of its errors (a full-compaction Hugoniot does not apply, and
-      its V, so the energy jump, carries the pores' unevenness)."""
+      its V, so the energy jump, carries the pores' unevenness);
+    - a slab that is not uniform or not steady: ``spread[k]`` = (near half − far half, late
+      half of the samples − early half) of field k beyond their noise (``measure_point``)
+      larger than ``residual_tol`` of the jump k − k0 in ρ, P or E (a relaxation zone, the
+      tail of a broad front; the state still changing)."""
     out = []
+    jumps = {}
+    if spread and pole is not None:
+        jumps = {k: values.get(k, np.nan) - k0
+                 for k, k0 in (("rho", pole.rho0), ("P", pole.P0), ("E", pole.E0))}  # fmt: skip
+    for i, (what, how) in enumerate(
+        (("slab not uniform", "its near and far halves differ by"),
+         ("slab not steady", "its state moved between the run's halves by"))
+    ):  # fmt: skip
+        worst = max(
+            ((abs(spread[k][i] / j), k) for k, j in jumps.items()
+             if k in spread and np.isfinite(j) and j != 0 and np.isfinite(spread[k][i])),
+            default=(0.0, ""),
+        )  # fmt: skip
+        if worst[0] > residual_tol:
+            out.append(f"{what}: {how} {worst[0]:.2%} of the jump in {worst[1]} beyond their "
+                       "noise (a relaxation zone, a broad front's tail, a state still "
+                       "changing): measure further behind the front or later")  # fmt: skip
     r, e = values.get("residual_flow", np.nan), values.get("residual_flow_err", np.nan)
     if np.isfinite(r) and not _closes(r, e, residual_tol):
         out.append(
@@ -373,6 +399,8 @@ def measure_point(
     def series(states: list[SlabState | None], k: str) -> np.ndarray:
         return np.array([np.nan if s is None else s[k] for s in states], dtype=float)
 
+    spread: dict[str, tuple[float, float]] = {}  # behind: (near − far, late − early) beyond noise
+
     def mean_err(side: str, k: str) -> tuple[float, float]:
         """Block average of field k of one slab, its error widened by the slab's
         non-uniformity (near half against far half) and drift (second half of the samples
@@ -390,6 +418,8 @@ def measure_point(
         h = yf.size // 2
         time_ = excess_spread(yf[:h], yf[yf.size - h :], n_blocks) if h >= n_blocks else 0.0
         e = e if np.isfinite(e) else np.nan
+        if side == "behind":
+            spread[k] = (2.0 * space, 2.0 * time_)
         return m, float(np.sqrt(e * e + space * space + time_ * time_))
 
     out: dict[str, float | str | bool] = {}
@@ -485,7 +515,7 @@ def measure_point(
     else:
         out["status"] = "ok" if converged else "not_converged"
         # the measured causes first: a status table shows the diagnostic's start
-        causes = named_causes({**out, "u_p": u_p}, residual_tol)
+        causes = named_causes({**out, "u_p": u_p}, residual_tol, spread, pole)
         out["diagnostic"] = (
             ""
             if converged
