@@ -197,3 +197,23 @@ def test_a_slab_not_uniform_or_not_steady_beyond_tolerance_is_named():
     causes = named_causes(v, 0.01, {"rho": (0.0, 0.01), "P": (0.0, 0.0), "E": (0.0, 0.0)}, pole)
     assert len(causes) == 1 and causes[0].startswith("slab not steady")
     assert named_causes(v, 0.01, {"rho": (0.004, 0.004), "P": (0.02, 0.0)}, pole) == []
+
+
+def test_a_disturbed_state_ahead_is_named_unless_two_wave():
+    """Material ahead moving at 0.064 ± 0.008 with P 0.40 ± 0.02 above P0 (AMW at u_p = 3 on
+    the default liquid): 1.4 % of a 29.75 jump in P, 2.1 % of u_p, beyond 3 errors: named.
+    Within its errors, below residual_tol of the jump, or flagged two_wave: not."""
+    from hugomap.analysis.shock import named_causes
+    from hugomap.states import Pole
+
+    pole = Pole(rho0=0.8, P0=6.0, E0=-0.9, T0=2.0, Pyy0=6.0, rho0_err=0.0, P0_err=0.0,
+                E0_err=0.0, T0_err=0.0, Pyy0_err=0.0)  # fmt: skip
+    v = {"P": 35.75, "rho": 1.047, "u_p": 3.0, "residual_flow": 0.0, "residual_flow_err": 0.01,
+         "ahead_P": 6.40, "ahead_P_err": 0.02, "ahead_u": 0.064, "ahead_u_err": 0.008,
+         "ahead_rho": 0.8005, "ahead_rho_err": 0.002, "two_wave": 0.0}  # fmt: skip
+    causes = named_causes(v, 0.01, pole=pole)
+    assert len(causes) == 1 and causes[0].startswith("state ahead off the pole: its u")
+    assert named_causes({**v, "two_wave": 1.0}, 0.01, pole=pole) == []
+    quiet = {**v, "ahead_P_err": 0.2, "ahead_u_err": 0.03}
+    assert named_causes(quiet, 0.01, pole=pole) == []
+    assert named_causes(v, 0.03, pole=pole) == []
