@@ -67,6 +67,8 @@ LAMMPS_CHECKPOINT = CheckpointKind(
 #: times the 300 K thermal speed) goes 0.08 Å past it.
 WALL_K = {"lj": 1000.0, "metal": 50.0}
 WALL_PAD = {"lj": 2.0, "metal": 2.0}
+#: Native units of a checkpoint's lengths and velocities (UDUNITS names; lj: reduced).
+NATIVE_NAMES = {"lj": ("sigma", "sigma tau^-1"), "metal": ("angstrom", "angstrom ps-1")}
 
 _LIBRARY = None
 
@@ -397,13 +399,14 @@ class LammpsSimulation:
         model, the time step and the thermostat as attributes."""
         x, v, ids = self.arrays()
         dims = ("atom", "xyz")
+        ln, vel = NATIVE_NAMES[self.units]
         ds = xr.Dataset(
             {
-                "x": (dims, x, {"units": "sigma", "long_name": "position"}),
-                "v": (dims, v, {"units": "sigma tau^-1", "long_name": "velocity"}),
+                "x": (dims, x, {"units": ln, "long_name": "position"}),
+                "v": (dims, v, {"units": vel, "long_name": "velocity"}),
                 "ids": (("atom",), ids, {"units": "1", "long_name": "atom label (LAMMPS id - 1)"}),
-                "L": (("xyz",), self.L.copy(), {"units": "sigma", "long_name": "box lengths (x: between the walls' start positions)"}),
-                "walls0": (("wall_param",), self.walls0.copy(), {"units": "sigma, sigma tau^-1", "long_name": "[x_L0, v_L, x_R0, v_R]"}),
+                "L": (("xyz",), self.L.copy(), {"units": ln, "long_name": "box lengths (x: between the walls' start positions)"}),
+                "walls0": (("wall_param",), self.walls0.copy(), {"units": f"{ln}, {vel}", "long_name": "[x_L0, v_L, x_R0, v_R]"}),
             },
             coords={"xyz": ["x", "y", "z"]},
         )  # fmt: skip
@@ -415,6 +418,7 @@ class LammpsSimulation:
             thermostat=json.dumps(None if self.T_bath is None
                                   else {"T": self.T_bath, "tau": self.tau_bath}),
             seed=self.seed, lammps_version=int(self.lmp.version()), hugomap_version=__version__,
+            lammps_units=self.units,
         )  # fmt: skip
         ds.attrs.update(attrs or {})
         return seal_checkpoint(ds, LAMMPS_CHECKPOINT)
@@ -485,3 +489,60 @@ class _StateView:
         return self._sim.n_particles
 
     periodic = np.array([False, True, True])
+
+
+class SIView:
+    """A units-metal ``LammpsSimulation`` seen in SI by the shock methods
+    (``window.protocol.ShockSolver``): time [s], wall positions [m], velocities [m/s]; the
+    simulation underneath (``sim``) keeps LAMMPS's units (Å, ps) and its raw profile sums
+    (read by ``backend.MetalProfile``, which converts them). Each conversion is one factor
+    of ``units.UnitSystem``: t = t_ps · time_s, x = x_Å · length_m, u = u_Å/ps ·
+    velocity_m_s."""
+
+    def __init__(self, sim: LammpsSimulation) -> None:
+        self.sim = sim
+        self.u = sim.unit_system
+
+    @property
+    def time(self) -> float:
+        return self.sim.time * self.u.time_s
+
+    @property
+    def steps(self) -> int:
+        return self.sim.steps
+
+    @property
+    def n_particles(self) -> int:
+        return self.sim.n_particles
+
+    @property
+    def dt(self) -> float:
+        return self.sim.dt * self.u.time_s
+
+    def advance(self, n_steps: int) -> None:
+        self.sim.advance(n_steps)
+
+    def wall_positions(self) -> tuple[float, float]:
+        xl, xr = self.sim.wall_positions()
+        return xl * self.u.length_m, xr * self.u.length_m
+
+    def set_walls(self, v_left: float, v_right: float) -> None:
+        self.sim.set_walls(v_left / self.u.velocity_m_s, v_right / self.u.velocity_m_s)
+
+    def mean_velocity(self) -> float:
+        return self.sim.mean_velocity() * self.u.velocity_m_s
+
+    def galilean_shift(self, du: float) -> None:
+        self.sim.galilean_shift(du / self.u.velocity_m_s)
+
+    def profile_sums(self, width: float) -> np.ndarray:
+        """The simulation's raw sums (native units) over bins of ``width`` [m]."""
+        return self.sim.profile_sums(width / self.u.length_m)
+
+    def save(self, path: str | os.PathLike, extra=None, attrs=None) -> Path:
+        return self.sim.save(path, extra=extra, attrs=attrs)
+
+
+def native(solver) -> LammpsSimulation:
+    """The ``LammpsSimulation`` of a solver the stages hold (itself, or an ``SIView``'s)."""
+    return getattr(solver, "sim", solver)
