@@ -1,24 +1,7 @@
 """The LAMMPS backend: ``hugomap.backend.Backend`` with the LAMMPS library doing the MD
 (``solver: lammps``; ``lammps.simulation.LammpsSimulation``).
 
-Two unit systems (``model.units``), one backend object each (``LammpsBackend.for_scene``,
-which the registry asks for a scene's backend, since the datasets' units follow the
-scene):
-- units lj (σ, ε, m = 1, τ = σ√(m/ε), k_B = 1): ``LammpsBackend``, datasets in reduced
-  units (``io.dataset.lj_units``), the equilibrium-MD reference of an lj/cut model;
-- units metal (Å, ps, eV, g/mol, K; e.g. copper with ``pair_style eam/alloy``):
-  ``MetalBackend``, datasets in SI (``io.dataset.si_units``: m, s, kg m⁻³, Pa, J kg⁻¹, K;
-  ``unit_system`` names LAMMPS units metal). The simulation keeps LAMMPS's units; the
-  shock methods see it through ``simulation.SIView`` (time [s], positions [m], velocities
-  [m/s]) and read its raw sums through ``MetalProfile`` (ρ [kg/m³], u [m/s], P [Pa], E
-  [J/kg], T [K]), so D, u_p and the jump residuals are measured in one coherent system.
-  Scene keys keep LAMMPS's units (lengths Å, times ps, T0 K, mass g/mol, ``sample.rho0``
-  Å⁻³ or ``sample.lattice_constant`` Å), except the piston velocities ``shock.u_p`` [m/s]
-  (the datasets' coordinate) and the reference's c0 [m/s]. Conversions: ``units``.
-  Reference: a linear Us–u_p fit (``reference.model: linear_us_up``, e.g. LASL's for
-  copper), tabulated as the CSPH backend tabulates its EOS's (``linear_reference``).
-
-The piston scheme only. The sample is
+This slice: units lj (σ, ε, m = 1, τ = σ√(m/ε), k_B = 1), the piston scheme. The sample is
 the MD backend's: an FCC lattice (``md.sample.fcc_positions``, Maxwell velocities at T0)
 between a reflecting wall at x = 0 and a one-sided harmonic wall at L_x, y and z periodic,
 equilibrated with a CSVR thermostat (LAMMPS ``fix temp/csvr``) while ``md.sample.size_bulk``
@@ -49,15 +32,12 @@ import xarray as xr
 
 from ..analysis.shock import bin_edges, slab_state
 from ..analysis.stats import block_average
-from ..io.dataset import UnitTable, lj_units, si_units
-from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
+from ..io.dataset import lj_units
+from ..states import ControlParams, PistonFrame, Pole, Resources, WindowStart
 from .scene_config import pair_style_name
-from .units import METAL, UnitSystem, unit_system
 
 log = logging.getLogger("hugomap")
-#: Kept clear of a wall when measuring the pole [σ | Å]: lj the MD backend's 4 σ; metal
-#: 8 Å, beyond the walls' disturbed planes (an EAM cutoff, 5.5 Å for Cu_mishin1, and more).
-WALL_LAYER = {"lj": 4.0, "metal": 8.0}
+WALL_LAYER = 4.0  # sigma kept clear of a wall when measuring the pole (the MD backend's)
 POLE_EVERY = 25  # steps between pole samples (the MD backend's)
 
 # Cost model, measured on the 2-core development machine (one rank, one OpenMP thread):
@@ -74,64 +54,7 @@ NOT_YET = (
 
 
 def _area(solver) -> float:
-    """Transverse area L_y L_z in the simulation's own units [σ² | Å²]."""
-    from .simulation import native
-
-    sim = native(solver)
-    return float(sim.L[1] * sim.L[2])
-
-
-class MetalProfile:
-    """Profile reader of a units-metal run, in SI: bins of ``bin_width`` [m] from x = 0
-    (``native_width`` [Å] in the simulation) across the transverse ``area`` [Å²], atoms of
-    ``mass`` [g/mol]. The raw sums are LAMMPS's (``LammpsSimulation.profile_sums``: count
-    c, Σv_a [Å/ps], Σv_a² [Å²/ps²], Σpe [eV], ΣW_aa [eV]); for a slab of volume V = A w n
-    [Å³] and m the atom mass (``units.METAL``: u = 1.66053906660e-27 kg per g/mol, mvv2e =
-    u (Å/ps)²/eV, k_B [eV/K], 1 eV = 1.602176634e-19 J, 1 Å = 1e-10 m, 1 Å/ps = 100 m/s):
-
-        ū_a  = Σv_a / c                      [Å/ps]  → u = ū_x · 100        [m/s]
-        K_aa = m mvv2e (Σv_a² − c ū_a²)       [eV]
-        ρ    = c m u_kg / (V · 1e-30)                                     [kg/m³]
-        P_aa = (K_aa + ΣW_aa) / V             [eV/Å³] → · 1.602176634e11  [Pa]
-        T    = ΣK_aa / (3 (c − 1) k_B)                                    [K]
-        E    = (½ ΣK_aa + Σpe) / c            [eV/atom] → · eV/(m u_kg)    [J/kg]
-
-    (the MD backend's ``md.profiles`` formulas with the mass and the unit factors)."""
-
-    x0 = 0.0
-
-    def __init__(self, area: float, bin_width: float, mass: float, units: UnitSystem = METAL):
-        self.u = units
-        self.area = float(area)
-        self.native_width = float(bin_width)
-        self.bin_width = self.native_width * units.length_m
-        self.mass = float(mass)
-
-    def sums(self, solver) -> np.ndarray:
-        from .simulation import native
-
-        return native(solver).profile_sums(self.native_width)
-
-    def velocity(self, sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        c = sums[:, 0]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return sums[:, 1] / c * self.u.velocity_m_s, c
-
-    def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
-        u, s = self.u, np.asarray(summed, dtype=float)
-        c = s[0]
-        vol = self.area * self.native_width * n_bins  # [Å³]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            ubar = s[1:4] / c
-            kin = self.mass * u.mvv2e * (s[4:7] - c * ubar * ubar)  # [eV]
-            P = (kin + s[8:11]) / vol * u.pressure_Pa
-            m_kg = self.mass * u.mass_kg
-            return SlabState(
-                rho=float(c * m_kg / (vol * u.length_m**3)), u=float(ubar[0] * u.velocity_m_s),
-                P=float(P[0]), Pyy=float(P[1]), Pzz=float(P[2]),
-                E=float((0.5 * kin.sum() + s[7]) / c * u.energy_J / m_kg),
-                T=float(kin.sum() / (3.0 * (c - 1.0) * u.k_B)) if c > 1 else float("nan"),
-            )  # fmt: skip
+    return float(solver.L[1] * solver.L[2])
 
 
 def md_view(scene: dict) -> dict:
