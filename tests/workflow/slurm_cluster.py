@@ -129,8 +129,10 @@ SchedulerType=sched/backfill
 AccountingStorageType=accounting_storage/none
 JobAcctGatherType=jobacct_gather/none
 JobCompType=jobcomp/none
-# finished jobs stay visible to squeue this long: the executor's status polling needs it
-MinJobAge=300
+# finished jobs stay visible to squeue this long: the executor's status polling needs it,
+# and test_slurm reads every job of the sweep at its end (with 300 s a sweep slowed by a
+# loaded machine lost its first jobs from the list)
+MinJobAge=3600
 ReturnToService=2
 KillWait=5
 StateSaveLocation={root}/state

@@ -32,7 +32,7 @@ ROOT = Path(__file__).resolve().parents[2]
 TINY = ROOT / "tests" / "workflow" / "tiny" / "config.yaml"
 PROFILE = ROOT / "workflow" / "profiles" / "slurm"
 # Without accounting, the executor's default `sacct` polling hangs:
-# poll with squeue, which sees finished jobs for the cluster's MinJobAge (300 s >= 3 x 2 s).
+# poll with squeue, which sees finished jobs for the cluster's MinJobAge (3600 s >= 3 x 2 s).
 NO_ACCOUNTING = ("--slurm-no-account", "--slurm-status-command", "squeue",
                  "--slurm-init-seconds-before-status-checks", "2",
                  "--seconds-between-status-checks", "1")  # fmt: skip
