@@ -52,6 +52,22 @@ def point_tag(u: float) -> str:
     return f"{float(u):.6g}"
 
 
+def duplicate_point_tags(base: str, u_ps: list[float]) -> list[str]:
+    """Problems for piston velocities that share a point folder (``point_tag``), each
+    naming its key ``<base>.shock.u_p[i]``."""
+    problems, seen = [], {}
+    for i, u in enumerate(u_ps):
+        tag = point_tag(u)
+        if tag in seen:
+            problems.append(
+                f"{base}.shock.u_p[{i}] = {u}: same point folder up{tag} as "
+                f"shock.u_p[{seen[tag]}] = {u_ps[seen[tag]]}; piston velocities must "
+                "differ in their first 6 significant digits"
+            )
+        seen.setdefault(tag, i)
+    return problems
+
+
 def config_hash(obj: Any) -> str:
     """SHA-256 (first 16 hex digits) of the canonical JSON of ``obj``."""
     return hashlib.sha256(json.dumps(obj, sort_keys=True).encode()).hexdigest()[:16]

@@ -311,3 +311,15 @@ def test_mw_position_gain_is_per_window_time_for_both_solvers() -> None:
     assert md_w["mw"]["properties"]["gain_position"]["default"] / md_w["window_time"][
         "default"
     ] == pytest.approx(0.05)
+
+
+def test_piston_velocities_sharing_a_point_folder_are_refused_naming_the_key():
+    """Two u_p with the same 6 significant digits write one folder: refused, both keys named
+    (one rule for every backend, ``keys.duplicate_point_tags``)."""
+    from hugomap.keys import duplicate_point_tags
+
+    problems = duplicate_point_tags("scenes.s", [1.0, 2.0, 1.0000001])
+    assert len(problems) == 1
+    assert problems[0].startswith("scenes.s.shock.u_p[2] = 1.0000001: same point folder up1")
+    assert "shock.u_p[0] = 1.0" in problems[0]
+    assert duplicate_point_tags("scenes.s", [1.0, 1.00001]) == []

@@ -14,7 +14,7 @@ import importlib.util
 import math
 from pathlib import Path
 
-from ..keys import point_tag
+from ..keys import duplicate_point_tags
 
 #: Pair styles this backend runs, with the unit system each needs, and the position of the
 #: potential file among ``pair_coeff``'s arguments (None: no file).
@@ -226,16 +226,7 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             f"shock.load_fraction = {sh['load_fraction']} for {box}"
         )
     problems += _check_reference(base, scene)
-    seen: dict[str, int] = {}
-    for i, u in enumerate(sh["u_p"]):
-        tag = point_tag(u)
-        if tag in seen:
-            problems.append(
-                f"{base}.shock.u_p[{i}] = {u}: same point folder up{tag} as "
-                f"shock.u_p[{seen[tag]}] = {sh['u_p'][seen[tag]]}; piston velocities must "
-                "differ in their first 6 significant digits"
-            )
-        seen.setdefault(tag, i)
+    problems += duplicate_point_tags(base, sh["u_p"])
     return problems
 
 

@@ -12,7 +12,7 @@ point files and the aggregate (``io.dataset.with_si``; docs/datasets.md).
 
 from __future__ import annotations
 
-from ..keys import point_tag
+from ..keys import duplicate_point_tags
 
 #: Relative tolerance of a data file's L_x against cells·a [-]: a prepared liquid sample is
 #: shorter by the walls' excess layer 2Γ/ρ0 (0.2 % of the default liquid, 0.6 % of a
@@ -82,16 +82,7 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
         )
     if smp.get("data_file"):
         problems += _check_data_file(base, smp, L)
-    seen: dict[str, int] = {}
-    for i, u in enumerate(sh["u_p"]):
-        tag = point_tag(u)
-        if tag in seen:
-            problems.append(
-                f"{base}.shock.u_p[{i}] = {u}: same point folder up{tag} as "
-                f"shock.u_p[{seen[tag]}] = {sh['u_p'][seen[tag]]}; piston velocities "
-                f"must differ in their first 6 significant digits"
-            )
-        seen.setdefault(tag, i)
+    problems += duplicate_point_tags(base, sh["u_p"])
     if scene["phase"] == "liquid" and "reference" in scene:
         ref = scene["reference"]
         rho_max = smp["rho0"] * max(ref["compressions"])
