@@ -275,10 +275,10 @@ def named_causes(
       between the inflow and the front moves at +0.064 ± 0.008 σ/τ, P +0.40 ± 0.02 above P0,
       1.4 % of the jump)."""
     out = []
-    jumps = {}
-    if spread and pole is not None:
-        jumps = {k: values.get(k, np.nan) - k0
-                 for k, k0 in (("rho", pole.rho0), ("P", pole.P0), ("E", pole.E0))}  # fmt: skip
+    spread = spread or {}
+    jumps = {} if pole is None else {
+        k: values.get(k, np.nan) - k0
+        for k, k0 in (("rho", pole.rho0), ("P", pole.P0), ("E", pole.E0))}  # fmt: skip
     for i, (what, how) in enumerate(
         (("slab not uniform", "its near and far halves differ by"),
          ("slab not steady", "its state moved between the run's halves by"))
@@ -310,10 +310,9 @@ def named_causes(
         )
     if pole is not None and not values.get("two_wave", 0.0):
         # the jump is taken from the pole: material ahead off it biases every residual
-        ahead = (("P", values.get("ahead_P", np.nan) - pole.P0, values.get("P", np.nan) - pole.P0),
+        ahead = (("P", values.get("ahead_P", np.nan) - pole.P0, jumps["P"]),
                  ("u", values.get("ahead_u", np.nan), values.get("u_p", np.nan)),
-                 ("rho", values.get("ahead_rho", np.nan) - pole.rho0,
-                  values.get("rho", np.nan) - pole.rho0))  # fmt: skip
+                 ("rho", values.get("ahead_rho", np.nan) - pole.rho0, jumps["rho"]))  # fmt: skip
         worst = max(
             ((abs(d / j), k, d) for k, d, j in ahead
              if np.isfinite(d) and np.isfinite(j) and j != 0
