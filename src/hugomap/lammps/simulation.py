@@ -373,14 +373,16 @@ class LammpsSimulation:
         """Raw per-bin sums (nbins, 11) in ``md.profiles.SUM_FIELDS`` order over slabs of
         ``width`` [σ | Å] from x = 0 to L_x: count, Σv_a, Σv_a², Σpe, ΣW_aa in the native
         units (velocities [σ/τ | Å/ps], energies [ε | eV]; no mass: the reader multiplies)."""
+        from ..md.profiles import SUM_FIELDS, bin_sums
+
         nbins = int(math.floor(self.L[0] / width + 1e-9))
-        x, v = self._x(), self._v()
         pe, vir = self.per_atom_energy_virial()
-        b = np.floor(x[:, 0] / width).astype(np.int64)
-        keep = (b >= 0) & (b < nbins)
-        b = b[keep]
-        cols = [np.ones(b.size), *v[keep].T, *(v[keep] ** 2).T, pe[keep], *vir[keep].T]
-        return np.stack([np.bincount(b, weights=c, minlength=nbins) for c in cols], axis=1)
+        out = np.zeros((nbins, len(SUM_FIELDS)))
+        # the MD backend's kernel: one binning rule for both (atoms stay at x >= 0, behind
+        # the reflecting piston, where its truncation is the floor)
+        bin_sums(np.ascontiguousarray(self._x()), np.ascontiguousarray(self._v()),
+                 np.ascontiguousarray(pe), np.ascontiguousarray(vir), float(width), out)  # fmt: skip
+        return out
 
     @property
     def state(self) -> _StateView:
