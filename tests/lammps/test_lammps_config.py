@@ -65,20 +65,33 @@ def test_missing_potential_file_is_refused_naming_the_key() -> None:
     validate_config({"scenes": {"t": eam}})
 
 
-def test_window_schemes_are_refused_naming_the_key() -> None:
+def test_window_schemes_validate_with_the_units_defaults() -> None:
     sc = copy.deepcopy(LJ)
-    sc["schemes"] = ["piston", "amw"]
+    sc["schemes"] = ["piston", "amw", "mw", "dichotomy"]
+    w = validate_config({"scenes": {"t": sc}})["scenes"]["t"]["window"]
+    assert (w["length"], w["ghost_width"], w["settle_time"], w["window_time"]) == (
+        50.0, 3.0, 10.0, 2.0)  # fmt: skip
+    assert w["dichotomy"]["half_width"] == 0.4 and w["outflow"]["kind"] == "rigid"
+    assert w["amw"]["beta"] == 0.5 and w["front_fraction"] == 0.6  # the schema's defaults
+
+
+def test_unsupported_window_settings_are_refused_naming_the_key() -> None:
+    sc = copy.deepcopy(LJ)
+    sc["schemes"] = ["amw"]
+    sc["window"] = {"outflow": {"kind": "absorbing"}}
     msg = _problems(sc)
-    assert "scenes.t.schemes = ['piston', 'amw']" in msg and "piston scheme only" in msg
+    assert "scenes.t.window.outflow.kind = 'absorbing'" in msg and "['rigid']" in msg
+    sc["window"] = {"ghost_width": 2.5}
+    sc["model"]["pair_style"] = "lj/cut 3.0"
+    msg = _problems(sc)
+    assert "scenes.t.window.ghost_width = 2.5" in msg and "cutoff 3" in msg
+    # the MD backend's absorbing-outflow times are not LAMMPS keys
+    sc["window"] = {"outflow": {"tau_fast": 0.5}}
+    assert "tau_fast" in _problems(sc)
     # the top-level schemes, when the scene has none of its own
-    msg = _problems(copy.deepcopy(LJ), schemes=["piston", "dichotomy"])
-    assert "schemes = ['piston', 'dichotomy']: solver lammps (scene scenes.t)" in msg
-
-
-def test_window_block_is_not_a_lammps_key() -> None:
     sc = copy.deepcopy(LJ)
-    sc["window"] = {"length": 30.0}
-    assert "unknown key(s) ['window']" in _problems(sc)
+    sc["window"] = {"outflow": {"kind": "absorbing"}}
+    assert "window.outflow.kind" in _problems(sc, schemes=["piston", "dichotomy"])
 
 
 # -- with the library --------------------------------------------------------------------------

@@ -1,5 +1,6 @@
-"""Solver ``lammps`` through the stages (prepare_sample → load_to_target → piston_point) on
-the LJ liquid, against the numba MD backend (``solver: md``) on the same scene.
+"""Solver ``lammps`` through the stages (prepare_sample → load_to_target → piston_point,
+and window_start → control_point amw on the same loading) on the LJ liquid, against the
+numba MD backend's piston point (``solver: md``) on the same scene.
 
 The scene: ρ0 = 0.80, T0 = 2.0, lj/cut 2.5 shifted (the MD backend's default potential),
 cells [100, 4, 4] (6,400 atoms, L_x ≈ 170 σ, 6.8 σ across), seed 1, u_p = 2 σ/τ, shock
@@ -28,6 +29,20 @@ Noise that sets the tolerances, measured on this box:
   mean), P0 0.8 % (5.934 against 5.982), E0 0.009 ε lower: well inside the bounds, and not
   the far wall's kind (soft here, specular in MD): with a reflecting far wall LAMMPS gave
   T0 1.9926 and 2.0017 (seeds 1, 2), as wide a spread as the offset.
+- The AMW window point on LAMMPS (``md.window.MDWindow`` over LAMMPS, cut from the LAMMPS
+  loading checkpoint; window 50 σ, settle 6 τ, steady average 8 τ; about 50 s): its D is
+  L⟨dω/dt⟩ − u_in over the average, whose error (the ω slope's, correlated samples, and its
+  scatter over four spans) is the front's wander over 8 τ: measured 10.667 ± 0.143 σ/τ
+  (1.3 %) against the MD piston's 10.753 (seed 1). Reference: that MD piston point; the
+  bound is 3 of the two points' combined error, √(D_err_l² + D_err_m²) (independent runs
+  of two MD engines, each with its own error; 3σ leaves a 0.3 % chance of a false failure
+  for Gaussian errors), and the window's own D_err must stay below 2.5 % of D, so a point
+  too noisy to test anything fails rather than passes. A wrong window frame (u_in, u_out
+  of the wrong sign or units) or a pole the inflow does not share moves D by far more,
+  and the mass and momentum jump conditions, each within 3 of its error, tie ρ and P to
+  that D. Not asserted: the slab's flow relative to the outflow boundary, measured
+  −1.4 ± 0.3 % of u_p (status not_converged; the piston slabs of the MD backend flow
+  0.8–2.3 %).
 """
 
 from __future__ import annotations
@@ -49,9 +64,10 @@ SAMPLE = {"rho0": 0.80, "T0": 2.0, "cells": [100, 4, 4], "seed": 1, "equilibrate
           "pole_time": 3.0}  # fmt: skip
 SHOCK = {"u_p": [U_P], "dt": 0.003, "sample_every": 20, "gap": 6.0, "avg_length": 24.0,
          "load_fraction": 0.3}  # fmt: skip
+WINDOW = {"settle_time": 6.0, "average_time": 8.0}
 SCENES = {
     "lammps": {
-        "solver": "lammps", "phase": "liquid",
+        "solver": "lammps", "phase": "liquid", "schemes": ["piston", "amw"], "window": WINDOW,
         "model": {"units": "lj", "pair_style": "lj/cut 2.5", "pair_coeff": ["* * 1.0 1.0"],
                   "pair_modify": ["shift yes"], "mass": 1.0, "skin": 0.3},
         "sample": SAMPLE, "shock": SHOCK,
@@ -64,9 +80,13 @@ SCENES = {
 }  # fmt: skip
 
 
-def _run(solver: str, d: Path) -> tuple[xr.Dataset, xr.Dataset]:
+def _scene(solver: str) -> dict:
     cfg = validate_config({"scenes": {solver: copy.deepcopy(SCENES[solver])}})
-    scene = dict(cfg["scenes"][solver], name=solver)
+    return dict(cfg["scenes"][solver], name=solver)
+
+
+def _run(solver: str, d: Path) -> tuple[xr.Dataset, xr.Dataset]:
+    scene = _scene(solver)
     stages.prepare_sample(scene, d / "sample.nc")
     stages.load_to_target(d / "sample.nc", scene, U_P, d / "loaded.nc")
     stages.piston_point(d / "loaded.nc", scene, U_P, d / "point.nc")
@@ -76,8 +96,13 @@ def _run(solver: str, d: Path) -> tuple[xr.Dataset, xr.Dataset]:
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory) -> dict[str, tuple[xr.Dataset, xr.Dataset]]:
-    return {s: _run(s, tmp_path_factory.mktemp(s)) for s in ("lammps", "md")}
+def dirs(tmp_path_factory) -> dict[str, Path]:
+    return {s: tmp_path_factory.mktemp(s) for s in ("lammps", "md")}
+
+
+@pytest.fixture(scope="module")
+def runs(dirs) -> dict[str, tuple[xr.Dataset, xr.Dataset]]:
+    return {s: _run(s, dirs[s]) for s in ("lammps", "md")}
 
 
 def test_pole_agrees_with_the_md_backend(runs) -> None:
@@ -102,4 +127,27 @@ def test_piston_point_agrees_with_the_md_backend(runs) -> None:
     # conditions hold, each within 3 of its error (1-5 % on this box)
     for k in ("mass", "momentum", "energy", "flow"):
         r, e = float(lpt[f"residual_{k}"]), float(lpt[f"residual_{k}_err"])
+        assert abs(r) <= max(3.0 * e, 1e-4), (k, r, e, diag)
+
+
+def test_amw_window_point_agrees_with_the_md_piston(runs, dirs) -> None:
+    """The module docstring's window point: AMW on LAMMPS from the LAMMPS loading."""
+    d, scene = dirs["lammps"], _scene("lammps")
+    stages.window_start(d / "loaded.nc", scene, U_P, d / "window.nc")
+    with xr.open_dataset(d / "window.nc") as w:
+        assert w.attrs["status"] == "ok", w.attrs.get("diagnostic")
+        assert w.attrs["window_format"] == "hugomap-lammps-window/1"
+    stages.control_point(d / "window.nc", scene, U_P, d / "amw.nc", "amw")
+    with xr.open_dataset(d / "amw.nc") as p:
+        p = p.load()
+    diag = str(p["diagnostic"].values)
+    assert str(p["status"].values) in ("ok", "not_converged"), diag
+    assert float(p["u_p_set"]) == pytest.approx(U_P, abs=1e-9)  # AMW holds the amplitude
+    mpt = runs["md"][1]
+    D_l, e_l, D_m, e_m = (float(p["D"]), float(p["D_err"]), float(mpt["D"]),
+                          float(mpt["D_err"]))  # fmt: skip
+    assert 0.0 < e_l < 0.025 * D_l, (D_l, e_l, diag)
+    assert abs(D_l - D_m) <= 3.0 * (e_l**2 + e_m**2) ** 0.5, (D_l, e_l, D_m, e_m)
+    for k in ("mass", "momentum"):
+        r, e = float(p[f"residual_{k}"]), float(p[f"residual_{k}_err"])
         assert abs(r) <= max(3.0 * e, 1e-4), (k, r, e, diag)

@@ -9,6 +9,8 @@ other attribute. The kinds (``CheckpointKind``):
     CSPH_CHECKPOINT           ``sim_format``  hugomap-sph-checkpoint/1   a CSPH simulation
     CSPH_WINDOW_CHECKPOINT    + ``window_format``  hugomap-sph-window/2  a 1D CSPH window
     CSPH_WINDOW_2D_CHECKPOINT + ``window_format``  hugomap-sph-window2d/1  a 2D CSPH window
+    LAMMPS_CHECKPOINT         ``format``  hugomap-lammps-checkpoint/1   a LAMMPS run's state
+    LAMMPS_WINDOW_CHECKPOINT  + ``window_format``  hugomap-lammps-window/1  a LAMMPS window
 
 A window checkpoint is its solver's checkpoint with the window's variables and attributes
 added, all under the one checksum. ``seal_checkpoint`` sets the format attributes and the
@@ -80,6 +82,19 @@ CSPH_WINDOW_2D_CHECKPOINT = CheckpointKind(
     "hugomap-sph-window2d/1",
     inside=CSPH_CHECKPOINT,
 )
+
+#: The checkpoint of a LAMMPS run (``lammps.simulation.LammpsSimulation``): positions,
+#: velocities, ids, box, walls, clock. /1: first.
+LAMMPS_CHECKPOINT = CheckpointKind(
+    "a LAMMPS checkpoint", "format", "hugomap-lammps-checkpoint/1",
+    family="hugomap-lammps-checkpoint/",
+)  # fmt: skip
+#: A moving window on LAMMPS (``md.window.MDWindow`` over a ``LammpsSimulation``): the
+#: LAMMPS checkpoint plus the reservoir snapshot and the window's boundaries. /1: first.
+LAMMPS_WINDOW_CHECKPOINT = CheckpointKind(
+    "a LAMMPS window checkpoint", "window_format", "hugomap-lammps-window/1",
+    inside=LAMMPS_CHECKPOINT, family="hugomap-lammps-window/",
+)  # fmt: skip
 
 
 def _canonical_bytes(value: object) -> bytes:

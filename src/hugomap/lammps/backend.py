@@ -18,7 +18,7 @@ scene):
   Reference: a linear Us–u_p fit (``reference.model: linear_us_up``, e.g. LASL's for
   copper), tabulated as the CSPH backend tabulates its EOS's (``linear_reference``).
 
-The piston scheme only. The sample is
+The sample is
 the MD backend's: an FCC lattice (``md.sample.fcc_positions``, Maxwell velocities at T0)
 between a reflecting wall at x = 0 and a one-sided harmonic wall at L_x, y and z periodic,
 equilibrated with a CSVR thermostat (LAMMPS ``fix temp/csvr``) while ``md.sample.size_bulk``
@@ -29,10 +29,16 @@ wall at rest, the far wall moving at −u_p with the upstream material), so u_p 
 the shared analysis (``window.piston``, ``analysis.shock.measure_point``) measures the point
 from the profile sums (``md.profiles.SUM_FIELDS``, read by the MD backend's ``MDProfile``).
 
-Not yet: the moving-window schemes (``open_window``, ``load_window``, ``control_params``,
-``window_extras`` raise ``NotImplementedError``; validation refuses such scenes), units
-metal, trajectories (``extras`` writes the last frame only), a LAMMPS reference (an lj/cut
-scene's reference is the MD backend's equilibrium MD of the same potential).
+The moving-window schemes (AMW, MW, the dichotomy) run the MD backend's window,
+``md.window.MDWindow``, over LAMMPS simulations (``lammps.window.LammpsKit``: frozen atoms
+as LAMMPS type 2 under ``fix nve/noforce``, the outflow face a rigidly moving harmonic
+wall, the inflow a reservoir made by LAMMPS with the scene's model); units metal's window is
+seen in SI through ``lammps.window.WindowSIView``. Its checkpoint is
+``hugomap-lammps-window/1``. The absorbing outflow is refused at validation (the wall's
+impulse is not measured).
+
+Not yet: trajectories (``extras`` writes the last frame only), a LAMMPS reference (an
+lj/cut scene's reference is the MD backend's equilibrium MD of the same potential).
 """
 
 from __future__ import annotations
@@ -48,12 +54,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..analysis.shock import bin_edges, slab_state
+from ..analysis.shock import bin_edges, slab_state, track_front
 from ..analysis.stats import block_average
 from ..io.dataset import UnitTable, lj_units, si_units
 from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
 from .scene_config import pair_style_name
-from .units import METAL, UnitSystem, unit_system
+from .units import METAL, UnitSystem, number_density_factor, si_pole, unit_system
 
 log = logging.getLogger("hugomap")
 #: Kept clear of a wall when measuring the pole [σ | Å]: lj the MD backend's 4 σ; metal
@@ -67,11 +73,6 @@ POLE_EVERY = 25  # steps between pole samples (the MD backend's)
 BASE_MB = 1024  # Python + xarray + liblammps
 BYTES_PER_ATOM = 2048  # LAMMPS arrays, ghosts and neighbour lists, x4 margin
 S_PER_ATOM_STEP = 3.0e-6
-
-NOT_YET = (
-    "solver lammps runs the piston scheme only (the moving-window schemes are a later "
-    "slice; validation refuses scenes that ask for them)"
-)
 
 
 def _area(solver) -> float:
@@ -167,6 +168,27 @@ class LammpsBackend:
         """The simulation as the shock methods see it (units lj: itself)."""
         return sim
 
+    def window_view(self, win):
+        """The window as the window methods see it (units lj: itself)."""
+        return win
+
+    def _native_velocity(self, u: float) -> float:
+        """A velocity of the frame [σ/τ] in the simulation's units (lj: itself)."""
+        return u
+
+    def _native_pole(self, scene: dict, pole: Pole) -> tuple[float, float]:
+        """The pole's (number density [σ⁻³], energy per atom [ε]) in the simulation's
+        units (lj: as they are)."""
+        return float(pole.rho0), float(pole.E0)
+
+    def _pole_from_native(self, scene: dict, pole: dict[str, float]) -> dict[str, float]:
+        """A pole measured in the simulation's units, in the frame's (lj: as it is)."""
+        return dict(pole)
+
+    def _count_density(self, scene: dict, rho: float) -> float:
+        """Atoms per volume of a density of the frame (lj: ρ is the number density)."""
+        return rho
+
     def _length(self, x: float) -> float:
         """A length of the simulation [σ] in the frame's units (lj: itself)."""
         return x
@@ -229,9 +251,8 @@ class LammpsBackend:
         return sim, Pole.from_dict(pole), {"sizing": info}
 
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
-        from .simulation import native
-
-        return native(solver).save(out, extra=extra, attrs=attrs)
+        """Save a simulation, a window or their SI views (each saves what it holds)."""
+        return solver.save(out, extra=extra, attrs=attrs)
 
     def read_checkpoint(self, path: str | os.PathLike) -> xr.Dataset:
         from ..io.checkpoint import read_checkpoint
@@ -247,7 +268,14 @@ class LammpsBackend:
         return self.view(LammpsSimulation.from_dataset(ds, source))
 
     def load_window(self, ds: xr.Dataset, source: str | os.PathLike | None = None):
-        raise NotImplementedError(NOT_YET)
+        """A window from a verified ``hugomap-lammps-window/1`` checkpoint (``MDWindow``
+        over a new LAMMPS instance; ``CheckpointError`` naming ``source`` otherwise), as the
+        methods see it (``window_view``)."""
+        from ..md.window import MDWindow
+        from .window import LammpsKit
+
+        kit = LammpsKit(None, units=str(ds.attrs.get("lammps_units", "lj")))
+        return self.window_view(MDWindow.from_dataset(ds, source, kit))
 
     # -- the piston ------------------------------------------------------------------------
     def start_piston(self, solver, scene: dict, u_p: float) -> None:
@@ -286,20 +314,80 @@ class LammpsBackend:
 
         return MDProfile(_area(solver), scene["shock"]["bin_width"])
 
-    # -- the window: a later slice ---------------------------------------------------------
+    # -- the window ------------------------------------------------------------------------
     def open_window(
         self, solver, loaded: xr.Dataset, scene: dict, u_p: float, front: float,
         D_guess: float, pole: Pole, info: dict,
     ) -> WindowStart:  # fmt: skip
-        raise NotImplementedError(NOT_YET)
+        """The MD backend's window (``MDBackend.open_window``) on LAMMPS: a reservoir made
+        by LAMMPS with the scene's model (``md.window.make_reservoir`` through
+        ``window.LammpsKit``; a fluid's at the sample's measured (ρ0, E0), so window and
+        piston points share one pole, a crystal's at the lattice's ρ0 and T0, its pole the
+        inflow's), ``MDWindow.from_piston`` with the front at ``window.front_fraction``,
+        ``settle_time`` at the guessed D, then ω normalised by the pole and the shocked slab
+        between the outflow edge and the front (``shock.gap`` clear of both). ``front``,
+        ``u_p``, ``D_guess`` arrive in the frame's units (metal: SI) and are converted to
+        the simulation's; the returned window, pole and ω are in the frame's."""
+        from ..md.window import MDWindow, make_reservoir
+        from ..window.methods import OmegaSignal
+        from .simulation import native
+        from .window import LammpsKit
+
+        sim = native(solver)
+        w, sh, s = scene["window"], scene["shock"], scene["sample"]
+        fluid = scene["phase"] != "crystal"
+        kit = LammpsKit(scene["model"])
+        rho_n, e_n = self._native_pole(scene, pole)
+        res, inflow = make_reservoir(
+            (s["cells"][1], s["cells"][2]), rho_n if fluid else s["rho0"], s["T0"], None,
+            sim.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"], s["thermostat_tau"],
+            E0_target=e_n if fluid else None, kit=kit,
+        )  # fmt: skip
+        inflow = self._pole_from_native(scene, inflow)
+        log.info("inflow pole: %s", json.dumps(inflow))
+        to_native = self._length(1.0)
+        win = MDWindow.from_piston(
+            sim, res, front / to_native, self._native_velocity(u_p),
+            self._native_velocity(D_guess), w["length"], w["front_fraction"], w["ghost_width"],
+            w["cut_every"], w["sync_steps"], crystal=not fluid,
+            lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0), kit=kit,
+        )  # fmt: skip
+        res.close()
+        wpole = pole if fluid else Pole.from_dict(inflow)
+        win.advance(int(round(w["settle_time"] / win.dt)))  # [τ | ps] / [τ | ps]
+        view = self.window_view(win)
+        g, prof = view.geom, self.profile(view, scene)
+        sums = prof.sums(view)
+        x_f = track_front(prof, sums, g.x_lo, g.x_hi, view.u_out, view.u_in)
+        if not np.isfinite(x_f):
+            x_f = g.x_lo + w["front_fraction"] * g.length
+        edges = bin_edges(prof, sums.shape[0])
+        gap = self._length(sh["gap"])
+        shocked = slab_state(prof, sums, edges, g.x_lo + 0.5 * gap, x_f - 0.5 * gap)
+        if w["omega"] == "N":  # q = atoms in the window
+            up = self._count_density(scene, wpole.rho0)
+            sh_q = self._count_density(scene, shocked["rho"])
+        else:  # q = Σ P_xx over the window's volume
+            up, sh_q = wpole.P0, shocked["P"]
+        vol = view.area * g.length
+        sig = OmegaSignal(w["omega"], up * vol, sh_q * vol, prof.bin_width, prof)
+        return WindowStart(view, wpole, sig, {f"inflow_{k}": v for k, v in inflow.items()})
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
-        raise NotImplementedError(NOT_YET)
+        """The configured times (``ControlParams.from_window``) in the frame's units."""
+        return ControlParams.from_window(self._window_block(scene), window.geom.length,
+                                         self._length(scene["shock"]["gap"]))  # fmt: skip
+
+    def _window_block(self, scene: dict) -> dict:
+        """The ``window`` block in the frame's units (lj: as it is)."""
+        return scene["window"]
 
     def window_extras(
         self, window, out: Path, scene: dict, u_p: float, scheme: str, info: dict
     ) -> None:
-        raise NotImplementedError(NOT_YET)
+        """A window point's last state as ``<stem>_snapshot.extxyz`` (``extras``; frozen
+        atoms have ids < 0)."""
+        self._snapshot(window, out, scene, {"run": scheme, "u_p": u_p})
 
     # -- reference -------------------------------------------------------------------------
     #: The reference is computed at the pole the prepared sample measured (as for MD).
@@ -347,6 +435,10 @@ class LammpsBackend:
         σ, velocities σ/τ, masses m = 1, time τ), species ``Ar``, per atom its ``id`` and
         potential energy ``pe`` [ε]; the cell spans the walls and every atom along x, the
         periodic box across. No trajectory yet (``shock.snapshot_every`` is an MD key)."""
+        self._snapshot(solver, out, scene, {"run": "piston", "u_p": u_p})
+
+    def _snapshot(self, solver, out: Path, scene: dict, tags: dict) -> None:
+        """The last state of a run or window as an extended-XYZ snapshot beside ``out``."""
         if not scene["shock"].get("snapshots", True):
             return
         from ..io.extxyz import format_frame, snapshot_paths, write_extxyz
@@ -362,7 +454,7 @@ class LammpsBackend:
             x, (hi - lo, solver.L[1], solver.L[2]), velocities=v, fields={"id": ids, "pe": pe},
             origin=(lo, 0.0, 0.0), pbc=(False, True, True), time=float(solver.time),
             **self._snapshot_units(scene),
-            info={"scene": scene.get("name", ""), "run": "piston", "u_p": u_p,
+            info={"scene": scene.get("name", ""), **tags,
                   "step": int(solver.steps), "solver": "lammps",
                   "pair_style": scene["model"]["pair_style"]},
         )  # fmt: skip
@@ -478,6 +570,43 @@ class MetalBackend(LammpsBackend):
         from .simulation import SIView, native
 
         return SIView(native(sim))
+
+    def window_view(self, win):
+        """The window in SI (``window.WindowSIView``)."""
+        from .window import WindowSIView
+
+        return WindowSIView(win)
+
+    def _native_velocity(self, u: float) -> float:
+        return u / METAL.velocity_m_s  # m/s → Å/ps
+
+    def _native_pole(self, scene: dict, pole: Pole) -> tuple[float, float]:
+        """ρ0 [kg/m³] → [Å⁻³], E0 [J/kg] → [eV per atom] (``units.si_pole``'s factors)."""
+        mass = float(scene["model"]["mass"])
+        e = si_pole({"E0": 1.0}, mass)["E0"]
+        return float(pole.rho0) / number_density_factor(mass), float(pole.E0) / e
+
+    def _pole_from_native(self, scene: dict, pole: dict[str, float]) -> dict[str, float]:
+        return si_pole(pole, float(scene["model"]["mass"]))
+
+    def _count_density(self, scene: dict, rho: float) -> float:
+        """Atoms per m³ of ρ [kg/m³]."""
+        return rho / (float(scene["model"]["mass"]) * METAL.mass_kg)
+
+    def _window_block(self, scene: dict) -> dict:
+        """The window's times [ps] in s, its slab gap [Å] in m (the other keys as they are:
+        ``dichotomy.half_width`` and ``tolerance`` are in m/s already)."""
+        w = dict(scene["window"])
+        for k in ("window_time", "average_time"):
+            w[k] = self._time(w[k])
+        d = dict(w["dichotomy"])
+        for k in ("trial_time", "final_time"):
+            if d.get(k):
+                d[k] = self._time(d[k])
+        w["dichotomy"] = d
+        if w.get("outflow_gap"):
+            w["outflow_gap"] = self._length(w["outflow_gap"])
+        return w
 
     def _length(self, x: float) -> float:
         return x * METAL.length_m  # Å → m

@@ -1,11 +1,12 @@
 """Config of a LAMMPS scene (``solver: lammps``): its cross-key checks and the model's
 potential files (light: run at validation; no LAMMPS library is loaded, no xarray).
 
-This slice runs the piston scheme only, in units lj or metal: a scene whose schemes (its
-own ``schemes`` or the top-level ones) name a window scheme is refused here, naming the key.
-Defaults that depend on the unit system (``DEFAULTS``: time steps and times [τ | ps],
-lengths [σ | Å], the skin, lj's mass) are resolved here, as are ``sample.rho0`` from
-``sample.lattice_constant`` and metal's bin width (the lattice constant: two (100) planes).
+The piston and the moving-window schemes (amw, mw, dichotomy), in units lj or metal; the
+window's absorbing outflow is refused here, naming the key. Defaults that depend on the
+unit system (``DEFAULTS``: time steps and times [τ | ps], lengths [σ | Å], the skin, lj's
+mass, the window's lengths and times and the dichotomy's velocities [σ/τ | m/s]) are
+resolved here, as are ``sample.rho0`` from ``sample.lattice_constant`` and metal's bin
+width (the lattice constant: two (100) planes).
 """
 
 from __future__ import annotations
@@ -24,8 +25,10 @@ PAIR_STYLES = {
     "eam/alloy": ("metal", 2),
     "eam/fs": ("metal", 2),
 }
-#: Unit systems this slice runs.
+#: Unit systems this backend runs.
 RUNNABLE_UNITS = ("lj", "metal")
+#: Shock methods that run in the moving window.
+WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
 #: Defaults per unit system (lj: the values the schema had; metal: a copper-like crystal
 #: at 1 fs, whose fastest vibrations are ~0.13 ps, and Å-scale slabs of a few planes).
 DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
@@ -35,6 +38,11 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
                    "thermostat_tau": 0.5},
         "shock": {"dt": 0.002, "bin_width": 1.0, "rear_margin": 10.0, "gap": 8.0,
                   "avg_length": 30.0, "max_time": 100.0},
+        # the MD backend's window defaults
+        "window": {"length": 50.0, "ghost_width": 3.0, "cut_every": 2.0,
+                   "reservoir_equilibrate_time": 3.0, "settle_time": 10.0, "window_time": 2.0,
+                   "average_time": 10.0},
+        "window.dichotomy": {"half_width": 0.4, "tolerance": 0.02},
     },
     "metal": {
         "model": {"skin": 1.0},
@@ -42,6 +50,13 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
                    "thermostat_tau": 0.1},
         "shock": {"dt": 0.001, "rear_margin": 15.0, "gap": 10.0, "avg_length": 30.0,
                   "max_time": 50.0},
+        # copper-like: the layer beyond the EAM cutoff (5.5 A for Cu_mishin1), cuts every
+        # ~2 interplanar spacings, a window of ~55 (100) planes; times of a few sound
+        # transits of it (100 A at ~5 km/s: 2 ps); the dichotomy's bracket ~4 % of D
+        "window": {"length": 100.0, "ghost_width": 6.0, "cut_every": 4.0,
+                   "reservoir_equilibrate_time": 1.0, "settle_time": 2.0, "window_time": 0.5,
+                   "average_time": 3.0},
+        "window.dichotomy": {"half_width": 200.0, "tolerance": 10.0},
     },
 }  # fmt: skip
 #: Ranges that depend on the unit system: (key, lj range, metal range) (inclusive).
@@ -99,6 +114,25 @@ def resolved_pair_coeff(model: dict) -> list[str]:
     return out
 
 
+def model_cutoff(model: dict) -> float:
+    """The model's interaction cutoff [σ | Å]: lj/cut's global cutoff (``pair_style``'s
+    argument); an EAM potential's from its file (the last number of the line ``Nrho drho
+    Nr dr cutoff``: line 5 of an eam/alloy or eam/fs setfl file, line 3 of an eam funcfl
+    file; LAMMPS's pair_eam doc). A missing file raises ``FileNotFoundError``."""
+    style = pair_style_name(model)
+    if style == "lj/cut":
+        return float(str(model["pair_style"]).split()[1])
+    at = PAIR_STYLES[style][1]
+    path = resolve_file(str(model["pair_coeff"][0]).split()[at])
+    if path is None:
+        raise FileNotFoundError(str(model["pair_coeff"][0]).split()[at])
+    line = 2 if style == "eam" else 4
+    with open(path) as fh:
+        for _ in range(line):
+            fh.readline()
+        return float(fh.readline().split()[4])
+
+
 def resolve_defaults(scene: dict) -> None:
     """The defaults of the scene's unit system (``DEFAULTS``), ``sample.rho0`` = 4/a³ from
     ``sample.lattice_constant`` a (when rho0 is not given), and units metal's
@@ -106,8 +140,11 @@ def resolve_defaults(scene: dict) -> None:
     refused) is not resolved: ``check`` names it."""
     units = scene["model"].get("units", "lj")
     for block, values in DEFAULTS.get(units, {}).items():
+        where = scene
+        for name in block.split("."):
+            where = where.setdefault(name, {})
         for k, v in values.items():
-            scene[block].setdefault(k, v)
+            where.setdefault(k, v)
     smp = scene["sample"]
     if "rho0" not in smp and "lattice_constant" in smp:
         smp["rho0"] = 4.0 / float(smp["lattice_constant"]) ** 3
@@ -189,19 +226,10 @@ def _check_model(base: str, model: dict) -> list[str]:
 def check(base: str, scene: dict, cfg: dict) -> list[str]:
     """Checks of a LAMMPS scene that involve several keys (``base``: ``scenes.<name>``;
     ``cfg``: the whole config, for the top-level ``schemes``); each message names the key."""
-    problems = []
-    if "schemes" in scene:
-        schemes, where = scene["schemes"], f"{base}.schemes"
-    else:
-        schemes, where = cfg.get("schemes", ["piston"]), "schemes"
-    others = [s for s in schemes if s != "piston"]
-    if others:
-        problems.append(
-            f"{where} = {list(schemes)}: solver lammps (scene {base}) runs the piston scheme "
-            f"only for now, not {others}; allowed values ['piston'] (set {base}.schemes: "
-            "[piston])"
-        )
-    problems += _check_model(base, scene["model"])
+    problems = _check_model(base, scene["model"])
+    schemes = scene.get("schemes", cfg.get("schemes", ["piston"]))
+    if any(s in WINDOW_SCHEMES for s in schemes) and not problems:
+        problems += _check_window(base, scene)
     smp, sh = scene["sample"], scene["shock"]
     problems += _check_units(base, scene)
     if "rho0" not in smp:
@@ -227,6 +255,31 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
         )
     problems += _check_reference(base, scene)
     problems += duplicate_point_tags(base, sh["u_p"])
+    return problems
+
+
+def _check_window(base: str, scene: dict) -> list[str]:
+    """The window block of a scene that runs a window scheme: a rigid outflow (the absorbing
+    one reads the outflow wall's impulse, which this backend does not measure) and a frozen
+    layer at least the model's cutoff thick (``md.window.MDWindow.from_piston`` refuses a
+    thinner one)."""
+    w, problems = scene["window"], []
+    if w["outflow"]["kind"] != "rigid":
+        problems.append(
+            f"{base}.window.outflow.kind = {w['outflow']['kind']!r}: solver lammps runs the "
+            "rigid outflow only (the absorbing one needs the outflow wall's impulse, not "
+            "measured in LAMMPS); allowed values ['rigid']"
+        )
+    try:
+        rc = model_cutoff(scene["model"])
+    except (OSError, ValueError, IndexError) as exc:
+        return problems + [f"{base}.model: the cutoff cannot be read ({exc})"]
+    if w["ghost_width"] < rc:
+        problems.append(
+            f"{base}.window.ghost_width = {w['ghost_width']}: the frozen outflow layer must be "
+            f"at least the model's cutoff {rc:.4g} thick; allowed range [{rc:.4g}, 20.0] "
+            f"[{'sigma' if scene['model']['units'] == 'lj' else 'Angstrom'}]"
+        )
     return problems
 
 

@@ -6,10 +6,14 @@ views, one MPI rank (``nlocal`` is every atom).
 
 Geometry (units lj: σ, τ, ε, m = 1; the box is ``boundary f p p``):
 
-    x = −pad ............ 0 ==== atoms ==== x_R(t) ............ L + pad
+    x = −pad ............ x_L(t) ==== atoms ==== x_R(t) ............ L + pad
                           │                    │
           left wall: fix wall/reflect          right wall: fix wall/harmonic, one-sided
-          (static, specular)                   U = K (x − x_R)² for x > x_R (moves rigidly)
+          (at rest, specular) or,              U = K (x − x_R)² for x > x_R (moves rigidly)
+          moving, fix wall/harmonic
+          U = K (x − x_L)² for x < x_L
+
+A periodic box (``periodic_x``, ``boundary p p p``, no walls) is the window's reservoir.
 
 Wall k is at x_k0 + v_k t (``walls0`` = [x_L0, v_L, x_R0, v_R]) with the clock
 t = epoch_time + (step − epoch_step) Δt, the MD backend's convention. Why two kinds of wall:
@@ -21,7 +25,20 @@ in at every hit), while a potential wall that translates rigidly is, in its own 
 static conservative wall, so the upstream stays at −u_p on average. ``fix wall/piston``
 (SHOCK) mirrors in the wall's frame but only at ``zlo`` and in the lab frame. The right
 wall's position is an equal-style variable of ``step`` with the clock's formula, so LAMMPS
-and Python agree on it at every step.
+and Python agree on it at every step. A left wall that moves (the window's outflow face,
+at u_out in the window frame) is the same rigidly moving one-sided harmonic wall, mirrored;
+at rest it is ``fix wall/reflect`` (the piston), defined when a run starts
+(``_sync_left_wall``), so a wall that only passes through a velocity between two runs
+(a Galilean shift followed by ``set_walls``) leaves the piston's fix untouched.
+
+Frozen atoms (hugomap ids < 0: the window's inflow copy and outflow layer) are LAMMPS atom
+type 2, with type 1's mass and pair coefficients (``model_commands``), in group
+``hm_frozen`` moved by ``fix nve/noforce`` (x advances at the atom's own velocity, the
+forces on it are ignored; it still exerts forces); the mobile atoms (type 1, group
+``hm_mobile``) are integrated by ``fix nve`` and are the only ones the walls, the
+thermostat and every observable (``profile_sums``, ``energies``, ``mean_velocity``,
+``n_particles``) see. LAMMPS ids are 1..n in the order the atoms were created; the hugomap
+labels are kept beside them (``_labels``), since LAMMPS ids must be positive.
 
 Per-atom energy (``compute pe/atom pair``) and virial (``compute stress/atom NULL pair``,
 which is −W per atom in pressure·volume units, i.e. ε for units lj; W_aa = Σ_pairs ½ r_a
@@ -49,15 +66,16 @@ import xarray as xr
 from .. import __version__
 from ..failures import SolverUnstable
 from ..io.atomic import write_netcdf
-from ..io.checkpoint import CheckpointKind, read_checkpoint, seal_checkpoint, verify_checkpoint
-from .scene_config import resolved_pair_coeff
+from ..io.checkpoint import (
+    LAMMPS_CHECKPOINT,
+    read_checkpoint,
+    seal_checkpoint,
+    verify_checkpoint,
+)
+from .scene_config import PAIR_STYLES, pair_style_name, resolved_pair_coeff
 from .units import UNIT_SYSTEMS
 
-#: The checkpoint of a LAMMPS run: positions, velocities, ids, box, walls, clock. /1: first.
-LAMMPS_CHECKPOINT = CheckpointKind(
-    "a LAMMPS checkpoint", "format", "hugomap-lammps-checkpoint/1",
-    family="hugomap-lammps-checkpoint/",
-)  # fmt: skip
+__all__ = ["LAMMPS_CHECKPOINT", "LammpsSimulation", "SIView", "lammps_class", "native"]
 
 #: Right (soft) wall, per unit system: stiffness K [energy/length²] and how far beyond the
 #: wall the box extends (``pad`` [length]). lj: ω = √(2K/m) = 45 τ⁻¹, ω Δt ≤ 0.18 at the
@@ -105,13 +123,20 @@ def lammps_class():
 
 
 def model_commands(model: dict) -> list[str]:
-    """The scene's ``model`` block as LAMMPS commands (after ``create_box``), potential
-    files by their full paths (``scene_config.resolved_pair_coeff``)."""
+    """The scene's ``model`` block as LAMMPS commands (after ``create_box 2``), potential
+    files by their full paths (``scene_config.resolved_pair_coeff``). Atom type 2 (frozen
+    atoms) is type 1 again: the same mass, and ``pair_coeff * *`` covers both types (an
+    eam/alloy or eam/fs line that maps one element gets it for type 2 too)."""
     # suffix opt: the OPT package's variants (lj/cut/opt, eam/.../opt) where a style has one,
     # the plain style otherwise; lj/cut ran 25 % faster (1.2 vs 1.6 us per atom-step)
-    out = ["suffix opt", f"mass 1 {_f(model['mass'])}", f"pair_style {model['pair_style']}"]
+    out = ["suffix opt", f"mass * {_f(model['mass'])}", f"pair_style {model['pair_style']}"]
     out += [f"pair_modify {m}" for m in model.get("pair_modify", [])]
-    out += [f"pair_coeff {c}" for c in resolved_pair_coeff(model)]
+    at = PAIR_STYLES.get(pair_style_name(model), (None, None))[1]
+    for c in resolved_pair_coeff(model):
+        words = c.split()
+        if at is not None and pair_style_name(model) != "eam" and len(words) == at + 2:
+            words.append(words[-1])  # one element for type 1: the same for type 2
+        out.append("pair_coeff " + " ".join(words))
     out += [f"neighbor {_f(model['skin'])} bin", "neigh_modify every 1 delay 0 check yes"]
     return out
 
@@ -123,9 +148,10 @@ class LammpsSimulation:
     labels (LAMMPS ids = ids + 1), ``L`` (3,) box lengths (L_x the sample's, between the
     walls' start positions), ``walls0``, ``model`` (the validated ``model`` block),
     ``dt`` [τ], the clock (``time``, ``step``, ``epoch_time``, ``epoch_step``), and a CSVR
-    thermostat ``T_bath`` [ε/k_B] with ``tau_bath`` [τ] (LAMMPS ``fix temp/csvr``, its
-    temperature over 3N degrees of freedom: the walls do not conserve momentum) and
-    ``seed``.
+    thermostat ``T_bath`` [ε/k_B] with ``tau_bath`` [τ] (LAMMPS ``fix temp/csvr`` on the
+    mobile atoms, its temperature over 3N degrees of freedom: the walls do not conserve
+    momentum) and ``seed``; ``periodic_x``: a box periodic along x too, without walls (the
+    window's reservoir). Atoms with ``ids`` < 0 are frozen (module docstring).
     """
 
     def __init__(
@@ -133,6 +159,7 @@ class LammpsSimulation:
         walls0: np.ndarray, model: dict, dt: float, time: float = 0.0, step: int = 0,
         epoch_time: float | None = None, epoch_step: int | None = None,
         T_bath: float | None = None, tau_bath: float = 0.5, seed: int = 1,
+        periodic_x: bool = False,
     ) -> None:  # fmt: skip
         if not dt > 0:
             raise ValueError(f"dt = {dt}: must be > 0")
@@ -151,8 +178,11 @@ class LammpsSimulation:
         self.seed = int(seed)
         self.tau_bath = float(tau_bath)
         self._T_bath: float | None = None
-        self.pad = WALL_PAD[self.units]
+        self.periodic_x = bool(periodic_x)
+        self.pad = 0.0 if self.periodic_x else WALL_PAD[self.units]
         self._box_hi = float(self.L[0]) + self.pad
+        self._left_def: str | None = None  # the left wall's fix as defined now
+        self.ref_velocity = 0.0  # MDState's list-rebuild drift: LAMMPS has its own lists
         self._arrays_current = False  # per-atom energy and virial of the current positions
         self.lmp = lammps_class()(cmdargs=["-log", "none", "-screen", "none", "-nocite"])
         self._build(np.asarray(x, float), np.asarray(v, float), np.asarray(ids, np.int64))
@@ -167,19 +197,14 @@ class LammpsSimulation:
 
     def _build(self, x: np.ndarray, v: np.ndarray, ids: np.ndarray) -> None:
         L = self.L
-        self._x_left_fix = float(self.walls0[0])  # where fix wall/reflect stands, for good
-        lmp = self.lmp
+        self._x_left_fix = float(self.walls0[0])  # where fix wall/reflect stands at rest
         self._cmds([
             f"units {self.units}", "atom_style atomic", "atom_modify map array",
-            "boundary f p p",
+            "boundary p p p" if self.periodic_x else "boundary f p p",
             f"region box block {_f(-self.pad)} {_f(self._box_hi)} 0 {_f(L[1])} 0 {_f(L[2])} units box",
-            "create_box 1 box",
+            "create_box 2 box",
         ])  # fmt: skip
-        n = x.shape[0]
-        made = lmp.create_atoms(n, (ids + 1).tolist(), [1] * n, x.ravel().tolist(),
-                                v.ravel().tolist())  # fmt: skip
-        if made != n:
-            raise ValueError(f"LAMMPS created {made} of {n} atoms (atoms outside the box?)")
+        self._create(x, v, ids)
         self._cmds(model_commands(self.model))
         self._cmds([
             "compute hm_pe all pe/atom pair",
@@ -187,10 +212,64 @@ class LammpsSimulation:
             f"reset_timestep {self.step}",
             f"timestep {_f(self._dt)}",
             "thermo 0",
-            "fix hm_nve all nve",
-            f"fix hm_left all wall/reflect xlo {_f(self._x_left_fix)} units box",
+            "fix hm_nve hm_mobile nve",
+            "fix hm_frozen hm_frozen nve/noforce",
         ])  # fmt: skip
-        self._define_right_wall()
+        if not self.periodic_x:
+            self._sync_left_wall()
+            self._define_right_wall()
+
+    def _create(self, x: np.ndarray, v: np.ndarray, ids: np.ndarray) -> None:
+        """Create the atoms (LAMMPS ids 1..n in this order; type 2 where ``ids`` < 0) and
+        (re)make the groups ``hm_mobile``, ``hm_frozen`` (a group takes the atoms that match
+        it when it is defined)."""
+        n = x.shape[0]
+        self._labels = np.asarray(ids, dtype=np.int64).copy()
+        types = np.where(self._labels < 0, 2, 1)
+        made = self.lmp.create_atoms(n, list(range(1, n + 1)), types.tolist(),
+                                     x.ravel().tolist(), v.ravel().tolist())  # fmt: skip
+        if made != n:
+            raise ValueError(f"LAMMPS created {made} of {n} atoms (atoms outside the box?)")
+        self._cmds(["group hm_mobile type 1", "group hm_frozen type 2"])
+        self._all_mobile = bool((self._labels >= 0).all())
+
+    def replace_atoms(self, x: np.ndarray, v: np.ndarray, ids: np.ndarray) -> None:
+        """Replace the atom set (the window's inflow releases and outflow cuts): every atom
+        deleted and the new ones created (``_create``); the next run sets up again
+        (neighbour lists, forces at the new positions), so it continues as a plain
+        velocity-Verlet step of the new system."""
+        self.lmp.command("delete_atoms group all")
+        self._create(np.asarray(x, float), np.asarray(v, float), np.asarray(ids, np.int64))
+        self._arrays_current = False
+
+    def _left_wall_commands(self) -> list[str]:
+        """The left wall's fix for the current ``walls0``: at rest, ``fix wall/reflect`` at
+        x_L0; moving, a one-sided harmonic wall x_L(step) = x_L0 + v_L (t_e + (step − s_e)
+        Δt) (the clock's formula; the harmonic wall's surface is at x_L − 1 with cutoff 1,
+        so atoms feel it only behind x_L). Both act on the mobile atoms only."""
+        w = self.walls0
+        if w[1] == 0.0:
+            return [f"fix hm_left hm_mobile wall/reflect xlo {_f(w[0])} units box"]
+        return [
+            f"variable hm_xl equal {_f(w[0] - 1.0)}+({_f(w[1])})*({_f(self.epoch_time)}"
+            f"+(step-{self.epoch_step})*{_f(self._dt)})",
+            f"fix hm_left hm_mobile wall/harmonic xlo v_hm_xl {_f(WALL_K[self.units])} 0.0 1.0 "
+            "units box",
+        ]  # fmt: skip
+
+    def _sync_left_wall(self) -> None:
+        """Define the left wall's fix if it is not the one ``walls0`` asks for now."""
+        cmds = self._left_wall_commands()
+        text = "\n".join(cmds)
+        if text == self._left_def:
+            return
+        if self._left_def is not None:
+            undo = ["unfix hm_left"]
+            if "v_hm_xl" in self._left_def:
+                undo.append("variable hm_xl delete")
+            self._cmds(undo)
+        self._cmds(cmds)
+        self._left_def = text
 
     def _define_right_wall(self) -> None:
         """The right wall: x_R(step) = x_R0 + v_R (t_e + (step − s_e) Δt), the clock's
@@ -200,7 +279,7 @@ class LammpsSimulation:
         self._cmds([
             f"variable hm_xr equal {_f(w[2] + 1.0)}+({_f(w[3])})*({_f(self.epoch_time)}"
             f"+(step-{self.epoch_step})*{_f(self._dt)})",
-            f"fix hm_right all wall/harmonic xhi v_hm_xr {_f(WALL_K[self.units])} 0.0 1.0 units box",
+            f"fix hm_right hm_mobile wall/harmonic xhi v_hm_xr {_f(WALL_K[self.units])} 0.0 1.0 units box",
         ])  # fmt: skip
 
     @property
@@ -218,7 +297,7 @@ class LammpsSimulation:
         if value is not None:
             # 3N degrees of freedom (no momentum conservation between walls), as md.sample
             self._cmds([
-                "compute hm_temp all temp", "compute_modify hm_temp extra/dof 0",
+                "compute hm_temp hm_mobile temp", "compute_modify hm_temp extra/dof 0",
                 f"fix hm_csvr all temp/csvr {_f(value)} {_f(value)} {_f(self.tau_bath)} "
                 f"{self.seed + self.step % 100000 + 1}",
                 "fix_modify hm_csvr temp hm_temp",
@@ -237,7 +316,8 @@ class LammpsSimulation:
             self.epoch_time, self.epoch_step = self.time, self.step
             self._dt = float(value)
             self._cmds([f"timestep {_f(self._dt)}"])
-            self._replace_right_wall()
+            if not self.periodic_x:
+                self._replace_right_wall()
 
     @property
     def steps(self) -> int:
@@ -245,7 +325,17 @@ class LammpsSimulation:
 
     @property
     def n_particles(self) -> int:
-        return int(self.lmp.get_natoms())
+        """Mobile atoms (frozen ones are boundary, not material)."""
+        if self._all_mobile:
+            return int(self.lmp.get_natoms())
+        return int(np.count_nonzero(self._labels >= 0))
+
+    @property
+    def rc(self) -> float:
+        """The model's cutoff [σ | Å] (``scene_config.model_cutoff``)."""
+        from .scene_config import model_cutoff
+
+        return model_cutoff(self.model)
 
     def advance(self, n_steps: int) -> None:
         """Run ``n_steps`` velocity-Verlet steps in LAMMPS; ``SolverUnstable`` when LAMMPS
@@ -253,11 +343,8 @@ class LammpsSimulation:
         wall) or the velocities are not finite (nan); other LAMMPS errors propagate."""
         if n_steps <= 0:
             return
-        if self.walls0[1] != 0.0:
-            raise ValueError(
-                f"left wall velocity {self.walls0[1]}: the LAMMPS piston wall (fix "
-                "wall/reflect) is specular only at rest; run in the piston frame"
-            )
+        if not self.periodic_x:
+            self._sync_left_wall()
         try:
             # pre no: skip the set-up (neighbour lists, forces) when nothing changed since
             # the last run (the per-atom computes stay current: checked against run 0)
@@ -288,8 +375,8 @@ class LammpsSimulation:
         self._define_right_wall()
 
     def set_walls(self, v_left: float, v_right: float) -> None:
-        """Wall velocities [σ/τ], keeping their positions (the left one must stay at rest
-        when the run advances: ``advance``)."""
+        """Wall velocities [σ/τ], keeping their positions (the left one's fix follows when
+        the next run starts: ``_sync_left_wall``)."""
         xl, xr = self.wall_positions()
         t, w = self.time, self.walls0
         # a wall whose velocity does not change keeps its parameters exactly (the piston
@@ -302,9 +389,18 @@ class LammpsSimulation:
             w[2:4] = [xr - v_right * t, v_right]
         self._replace_right_wall()
 
+    def place_walls(self, x_left: float, v_left: float, x_right: float, v_right: float) -> None:
+        """Put the walls at ``x_left``/``x_right`` [σ | Å] now, moving at ``v_left``/
+        ``v_right`` [σ/τ | Å/ps] (the window's outflow face and far end)."""
+        t = self.time
+        self.walls0[:] = [x_left - v_left * t, v_left, x_right - v_right * t, v_right]
+        if v_left == 0.0:
+            self._x_left_fix = float(self.walls0[0])
+        self._replace_right_wall()
+
     def galilean_shift(self, du: float) -> None:
-        """Add ``du`` to every x velocity and to both wall velocities (the left wall must be
-        brought back to rest, ``set_walls``, before the next ``advance``)."""
+        """Add ``du`` to every x velocity, mobile and frozen, and to both wall velocities
+        (the piston brings its left wall back to rest, ``set_walls``, before it runs)."""
         self._v()[:, 0] += du  # (local velocities only: pair forces do not read v)
         self.set_walls(self.walls0[1] + du, self.walls0[3] + du)
 
@@ -339,7 +435,15 @@ class LammpsSimulation:
         return self.lmp.numpy.extract_atom("v")[: self._nlocal()]
 
     def _ids(self) -> np.ndarray:
-        return self.lmp.numpy.extract_atom("id")[: self._nlocal()].astype(np.int64) - 1
+        """The hugomap labels of the atoms in LAMMPS's local order."""
+        return self._labels[self.lmp.numpy.extract_atom("id")[: self._nlocal()] - 1]
+
+    def _forces(self) -> np.ndarray:
+        return self.lmp.numpy.extract_atom("f")[: self._nlocal()]
+
+    def _mobile(self) -> np.ndarray:
+        """Boolean mask of the mobile atoms in LAMMPS's local order."""
+        return self._ids() >= 0
 
     def per_atom_energy_virial(self) -> tuple[np.ndarray, np.ndarray]:
         """Per-atom potential energy (n,) [ε | eV] and virial W_aa (n, 3) [ε | eV] at the current
@@ -362,17 +466,26 @@ class LammpsSimulation:
         return np.array(pe, dtype=float), w
 
     def energies(self) -> tuple[float, float]:
-        """Total kinetic and potential energy [ε | eV]: K = ½ m mvv2e Σ v² (lj: m = 1)."""
+        """Total kinetic and potential energy of the mobile atoms [ε | eV]: K = ½ m mvv2e
+        Σ v² (lj: m = 1)."""
         pe, _ = self.per_atom_energy_virial()
-        return 0.5 * self._m_kin * float(np.sum(self._v() ** 2)), float(np.sum(pe))
+        if self._all_mobile:
+            return 0.5 * self._m_kin * float(np.sum(self._v() ** 2)), float(np.sum(pe))
+        m = self._mobile()
+        return 0.5 * self._m_kin * float(np.sum(self._v()[m] ** 2)), float(np.sum(pe[m]))
 
     def mean_velocity(self) -> float:
-        return float(self._v()[:, 0].mean())
+        """Mean x velocity of the mobile atoms [σ/τ | Å/ps] (one mass)."""
+        if self._all_mobile:
+            return float(self._v()[:, 0].mean())
+        return float(self._v()[self._mobile(), 0].mean())
 
     def profile_sums(self, width: float) -> np.ndarray:
         """Raw per-bin sums (nbins, 11) in ``md.profiles.SUM_FIELDS`` order over slabs of
         ``width`` [σ | Å] from x = 0 to L_x: count, Σv_a, Σv_a², Σpe, ΣW_aa in the native
-        units (velocities [σ/τ | Å/ps], energies [ε | eV]; no mass: the reader multiplies)."""
+        units (velocities [σ/τ | Å/ps], energies [ε | eV]; no mass: the reader multiplies),
+        of the mobile atoms (a frozen partner's share of a pair's energy and virial is not
+        counted, as in the MD backend)."""
         from ..md.profiles import SUM_FIELDS, bin_sums
 
         nbins = int(math.floor(self.L[0] / width + 1e-9))
@@ -380,13 +493,18 @@ class LammpsSimulation:
         out = np.zeros((nbins, len(SUM_FIELDS)))
         # the MD backend's kernel: one binning rule for both (atoms stay at x >= 0, behind
         # the reflecting piston, where its truncation is the floor)
-        bin_sums(np.ascontiguousarray(self._x()), np.ascontiguousarray(self._v()),
+        x, v = self._x(), self._v()
+        if not self._all_mobile:
+            m = self._mobile()
+            x, v, pe, vir = x[m], v[m], pe[m], vir[m]
+        bin_sums(np.ascontiguousarray(x), np.ascontiguousarray(v),
                  np.ascontiguousarray(pe), np.ascontiguousarray(vir), float(width), out)  # fmt: skip
         return out
 
     @property
     def state(self) -> _StateView:
-        """The view of the state ``md.sample.size_bulk`` and ``bulk_density`` read."""
+        """The view of the state ``md.sample.size_bulk``, ``bulk_density`` and the moving
+        window (``md.window.MDWindow``) read."""
         return _StateView(self)
 
     # -- checkpoints -------------------------------------------------------------------------
@@ -420,7 +538,7 @@ class LammpsSimulation:
             thermostat=json.dumps(None if self.T_bath is None
                                   else {"T": self.T_bath, "tau": self.tau_bath}),
             seed=self.seed, lammps_version=int(self.lmp.version()), hugomap_version=__version__,
-            lammps_units=self.units,
+            lammps_units=self.units, periodic_x=int(self.periodic_x),
         )  # fmt: skip
         ds.attrs.update(attrs or {})
         return seal_checkpoint(ds, LAMMPS_CHECKPOINT)
@@ -448,7 +566,7 @@ class LammpsSimulation:
             time=float(ds.attrs["time"]), step=int(ds.attrs["step"]),
             epoch_time=float(ds.attrs["epoch_time"]), epoch_step=int(ds.attrs["epoch_step"]),
             T_bath=None if th is None else th["T"], tau_bath=0.5 if th is None else th["tau"],
-            seed=int(ds.attrs["seed"]),
+            seed=int(ds.attrs["seed"]), periodic_x=bool(ds.attrs.get("periodic_x", 0)),
         )  # fmt: skip
 
     @classmethod
@@ -461,9 +579,14 @@ class LammpsSimulation:
 
 
 class _StateView:
-    """The attributes of ``md.state.MDState`` that ``md.sample.size_bulk`` reads and
-    writes, on a ``LammpsSimulation``: ``x``, ``v`` (live views: ``v *= λ`` scales the
-    LAMMPS velocities in place), ``L``, ``n``, ``periodic`` (x bounded by walls)."""
+    """The attributes of ``md.state.MDState`` that ``md.sample.size_bulk`` and the moving
+    window (``md.window.MDWindow``) read and write, on a ``LammpsSimulation``, in LAMMPS's
+    local order: ``x``, ``v`` (live views: ``v *= λ`` or ``v[mask, 0] = u`` change the
+    LAMMPS velocities in place), ``f``, ``ids`` (hugomap labels, a copy), ``L``, ``n`` (every
+    atom, frozen too), ``periodic``, ``walls0`` (the simulation's array), ``time``,
+    ``step``, ``ref_velocity`` (kept, unused: LAMMPS decides its own list rebuilds) and
+    ``impulse``: NaN, the wall impulse is not measured (the absorbing outflow, which reads
+    it, is refused for LAMMPS scenes at validation)."""
 
     def __init__(self, sim: LammpsSimulation) -> None:
         self._sim = sim
@@ -483,14 +606,48 @@ class _StateView:
             view[:] = value
 
     @property
+    def f(self) -> np.ndarray:
+        return self._sim._forces()
+
+    @property
+    def ids(self) -> np.ndarray:
+        return self._sim._ids()
+
+    @property
     def L(self) -> np.ndarray:
         return self._sim.L
 
     @property
     def n(self) -> int:
-        return self._sim.n_particles
+        return int(self._sim.lmp.get_natoms())
 
-    periodic = np.array([False, True, True])
+    @property
+    def periodic(self) -> np.ndarray:
+        return np.array([self._sim.periodic_x, True, True])
+
+    @property
+    def walls0(self) -> np.ndarray:
+        return self._sim.walls0
+
+    @property
+    def time(self) -> float:
+        return self._sim.time
+
+    @property
+    def step(self) -> int:
+        return self._sim.step
+
+    @property
+    def ref_velocity(self) -> float:
+        return self._sim.ref_velocity
+
+    @ref_velocity.setter
+    def ref_velocity(self, value: float) -> None:
+        self._sim.ref_velocity = float(value)
+
+    @property
+    def impulse(self) -> np.ndarray:
+        return np.full(2, np.nan)
 
 
 class SIView:
@@ -546,5 +703,8 @@ class SIView:
 
 
 def native(solver) -> LammpsSimulation:
-    """The ``LammpsSimulation`` of a solver the stages hold (itself, or an ``SIView``'s)."""
-    return getattr(solver, "sim", solver)
+    """The ``LammpsSimulation`` of a solver the stages hold: itself, or the one inside an
+    ``SIView``, a window (``md.window.MDWindow``) or an SI view of a window."""
+    while not isinstance(solver, LammpsSimulation) and hasattr(solver, "sim"):
+        solver = solver.sim
+    return solver

@@ -77,3 +77,27 @@ UNIT_SYSTEMS = {"lj": LJ, "metal": METAL}
 def unit_system(model: dict) -> UnitSystem:
     """The unit system of a scene's ``model`` block (``model.units``, default lj)."""
     return UNIT_SYSTEMS[model.get("units", "lj")]
+
+
+def number_density_factor(mass: float, units: UnitSystem = METAL) -> float:
+    """kg m⁻³ per (atoms per length³) for atoms of ``mass`` [g/mol]: ρ = n m u_kg/length³
+    (metal: n [Å⁻³] → ρ [kg/m³] = n · 63.546 · 1.66054e-27 / 1e-30 for copper)."""
+    return mass * units.mass_kg / units.length_m**3
+
+
+def specific_energy_factor(mass: float, units: UnitSystem = METAL) -> float:
+    """J kg⁻¹ per energy unit per atom for atoms of ``mass`` [g/mol]: E = e · eV/(m u_kg)."""
+    return units.energy_J / (mass * units.mass_kg)
+
+
+def si_pole(pole: dict[str, float], mass: float, units: UnitSystem = METAL) -> dict[str, float]:
+    """A pole measured in native units (ρ0 [length⁻³], P0, Pyy0 [energy/length³], E0
+    [energy per atom], T0 [K]; each with ``_err``) in SI: ρ0 [kg/m³], P0, Pyy0 [Pa], E0
+    [J/kg], T0 [K] (``number_density_factor``, ``pressure_Pa``,
+    ``specific_energy_factor``)."""
+    factor = {"rho0": number_density_factor(mass, units), "P0": units.pressure_Pa,
+              "Pyy0": units.pressure_Pa, "E0": specific_energy_factor(mass, units), "T0": 1.0}  # fmt: skip
+    out = {}
+    for key, value in pole.items():
+        out[key] = float(value) * factor[key.removesuffix("_err")]
+    return out

@@ -45,6 +45,18 @@ Z = ρ0 D (the Rayleigh-line impedance (P1 − P0)/u_p) stands for the shocked m
 
 Frozen atoms carry negative ids (inflow copy −1 − j, outflow layer ≤ −1 − N_res) and are
 skipped by the kicks, the walls and every observable (``md.integrate``, ``MDSimulation``).
+
+One window for every particle backend. ``MDWindow`` drives any simulation that offers what
+it reads (``ParticleKit`` names it): a ``state`` view with x, v, f, ids (negative: frozen,
+moving rigidly at its own velocity, exerting forces, in no observable), impulse, L,
+walls0, time, step, ref_velocity; ``advance``, ``place_walls``, ``replace_atoms``,
+``galilean_shift``, ``profile_sums``, ``mean_velocity``, ``wall_positions``, ``dt``,
+``to_dataset``. What differs between backends, building a simulation (the domain, the
+reservoir), loading one, its cutoff, units and checkpoint kind, comes from a ``ParticleKit``:
+``MDKit`` here (numba MD, reduced LJ units), ``lammps.window.LammpsKit`` for LAMMPS. All
+lengths, times and velocities are the simulation's own units; the fixed lengths of the
+set-up (``MARGIN``, the seam's overlap distance, the walls' layer) are multiples of the
+kit's ``scale`` (MD: 1 σ).
 """
 
 from __future__ import annotations
@@ -54,6 +66,7 @@ import math
 import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 import xarray as xr
@@ -62,6 +75,7 @@ from ..failures import SolverUnstable, WindowError
 from ..io.atomic import write_netcdf
 from ..io.checkpoint import (
     MD_WINDOW_CHECKPOINT,
+    CheckpointKind,
     read_checkpoint,
     seal_checkpoint,
     verify_checkpoint,
@@ -71,7 +85,113 @@ from .sample import fcc_state
 from .simulation import MDSimulation
 from .state import MDState
 
-MARGIN = 2.0  # σ of empty box beyond the frozen layers
+MARGIN = 2.0  # σ (kit scales) of empty box beyond the frozen layers
+
+
+class ParticleKit(Protocol):
+    """What ``MDWindow`` and ``make_reservoir`` need to know of a particle backend beyond
+    the simulation's own interface (module docstring), in the simulation's units:
+    ``window_kind`` (its window checkpoint kind), ``units`` (the names of its length and
+    velocity units), ``scale`` (the length the set-up's fixed lengths are counted in; σ),
+    ``m_kin`` (K = ½ m_kin Σ v²)."""
+
+    window_kind: CheckpointKind
+    units: tuple[str, str]
+    scale: float
+    m_kin: float
+
+    def rc(self, sim) -> float:
+        """The cutoff of ``sim``'s model."""
+
+    def rlist(self) -> float:
+        """Cutoff plus neighbour skin."""
+
+    def kT(self, T: float) -> float:
+        """k_B T in energy units."""
+
+    def reservoir(self, cells: tuple[int, int, int], rho0: float, T0: float, dt: float,
+                  seed: int, tau_bath: float):  # fmt: skip
+        """A fully periodic FCC box at (ρ0, T0) under a thermostat."""
+
+    def periodic(self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float):
+        """A fully periodic NVE box of these atoms."""
+
+    def bulk_fields(self, run, L: np.ndarray) -> tuple[float, float, float]:
+        """(P_xx, (P_yy + P_zz)/2, T) of a periodic box."""
+
+    def domain(self, like, x: np.ndarray, v: np.ndarray, ids: np.ndarray, L: np.ndarray,
+               walls0: np.ndarray):  # fmt: skip
+        """The window's domain (walls along x), with the clock and time step of ``like``."""
+
+    def load(self, ds: xr.Dataset, source: str | os.PathLike | None):
+        """The simulation of a verified window checkpoint."""
+
+
+class MDKit:
+    """What the window needs to know of the numba MD backend (``ParticleKit``): reduced LJ
+    units, the potential ``lj`` (its cutoff rc and list range rc + skin [σ]), checkpoint
+    kind ``MD_WINDOW_CHECKPOINT``; simulations are ``MDSimulation``s."""
+
+    window_kind: CheckpointKind = MD_WINDOW_CHECKPOINT
+    units = ("sigma", "sigma tau^-1")  # lengths, velocities (checkpoint attributes)
+    scale = 1.0  # σ: the unit of the set-up's fixed lengths
+
+    def __init__(self, lj: LJParams | None = None) -> None:
+        self.lj = lj
+
+    def rc(self, sim) -> float:
+        """The cutoff of ``sim``'s potential [σ]."""
+        return float(sim.lj.rc)
+
+    def rlist(self) -> float:
+        """rc + skin [σ]: the reservoir is at least 4 of these long."""
+        return float(self.lj.rlist)
+
+    def kT(self, T: float) -> float:
+        """k_B T [ε] of a temperature T [ε/k_B]."""
+        return T
+
+    m_kin = 1.0  # m·(velocity² → energy): K = ½ m_kin Σ v²
+
+    def reservoir(
+        self, cells: tuple[int, int, int], rho0: float, T0: float, dt: float, seed: int,
+        tau_bath: float,
+    ) -> MDSimulation:  # fmt: skip
+        """A fully periodic FCC box at (ρ0, T0) under the CSVR thermostat."""
+        state = fcc_state(cells, rho0, T0, seed, periodic_x=True)
+        return MDSimulation(state, self.lj, dt, T_bath=T0, tau_bath=tau_bath, seed=seed)
+
+    def periodic(self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float) -> MDSimulation:
+        """A fully periodic NVE box of these atoms (the snapshot, its pole run)."""
+        st = MDState(x=x, v=v, L=L.copy(), periodic=np.array([True, True, True]))
+        return MDSimulation(st, self.lj, dt)
+
+    def bulk_fields(self, run: MDSimulation, L: np.ndarray) -> tuple[float, float, float]:
+        """(P_xx, (P_yy + P_zz)/2, T) of a periodic box: one bin over all of it."""
+        from .profiles import fields_from_sums
+
+        f = fields_from_sums(run.profile_sums(float(L[0])), float(np.prod(L)))
+        return float(f["Pxx"][0]), 0.5 * float(f["Pyy"][0] + f["Pzz"][0]), float(f["T"][0])
+
+    def domain(
+        self, like: MDSimulation, x: np.ndarray, v: np.ndarray, ids: np.ndarray, L: np.ndarray,
+        walls0: np.ndarray,
+    ) -> MDSimulation:  # fmt: skip
+        """The window's domain: periodic across, walls along x, the clock and time step of
+        ``like`` (the piston run it is cut from)."""
+        s = like.state
+        state = MDState(x=x, v=v, L=L, periodic=np.array([False, True, True]), walls0=walls0,
+                        ids=ids)  # fmt: skip
+        state.time, state.step = s.time, s.step
+        return MDSimulation(state, like.lj, like.dt)
+
+    def load(self, ds: xr.Dataset, source: str | os.PathLike | None) -> MDSimulation:
+        return MDSimulation.from_dataset(ds, source)
+
+
+def _kit_of(sim) -> MDKit:
+    """The MD kit of an ``MDSimulation`` (the default when no kit is given)."""
+    return MDKit(sim.lj)
 
 
 @dataclass
@@ -93,9 +213,9 @@ class WindowGeometry:
 
 
 def make_reservoir(
-    cells_yz: tuple[int, int], rho0: float, T0: float, lj: LJParams, dt: float, seed: int,
-    equilibrate_time: float, tau_bath: float = 0.5, n_candidates: int = 40, every: int = 25,
-    E0_target: float | None = None, pole_time: float = 2.0,
+    cells_yz: tuple[int, int], rho0: float, T0: float, lj: LJParams | None, dt: float,
+    seed: int, equilibrate_time: float, tau_bath: float = 0.5, n_candidates: int = 40,
+    every: int = 25, E0_target: float | None = None, pole_time: float = 2.0, kit=None,
 ) -> tuple[MDSimulation, dict[str, float]]:  # fmt: skip
     """The inflow's snapshot and the state of the material it feeds in.
 
@@ -112,18 +232,21 @@ def make_reservoir(
     The returned pole is the inflow material's state, which the window points refer to:
     ρ0 exact, E0 the snapshot's energy per atom (conserved once released), and P0, Pyy0, T0
     measured on the released material itself, the snapshot run without thermostat for
-    ``pole_time`` [τ] (block-average errors)."""
-    from ..analysis.stats import block_average
-    from .profiles import fields_from_sums
+    ``pole_time`` [τ] (block-average errors).
 
+    ``kit`` (``ParticleKit``; default ``MDKit(lj)``) builds the boxes, so the same choice
+    runs on any particle backend, in its own units: ρ0 [length⁻³], T0 its temperature
+    (k_B T0 = ``kit.kT(T0)`` [energy]), E0 [energy per atom], P [energy/length³]."""
+    from ..analysis.stats import block_average
+
+    kit = kit if kit is not None else MDKit(lj)
     a = (4.0 / rho0) ** (1.0 / 3.0)
-    nx = max(2, math.ceil(4.0 * lj.rlist / a))
-    state = fcc_state((nx, *cells_yz), rho0, T0, seed, periodic_x=True)
-    res = MDSimulation(state, lj, dt, T_bath=T0, tau_bath=tau_bath, seed=seed)
+    nx = max(2, math.ceil(4.0 * kit.rlist() / a))
+    res = kit.reservoir((nx, *cells_yz), rho0, T0, dt, seed, tau_bath)
     res.advance(max(1, int(round(equilibrate_time / dt))))
-    L = res.state.L
+    L = res.state.L.copy()
     n = res.state.n
-    ke_T0 = 1.5 * (n - 1) * T0  # kinetic energy at T0 with the momentum removed
+    ke_T0 = 1.5 * (n - 1) * kit.kT(T0)  # kinetic energy at T0 with the momentum removed
     target_pe = None if E0_target is None else n * E0_target - ke_T0
     snaps = []
     for _ in range(n_candidates):
@@ -141,22 +264,20 @@ def make_reservoir(
             f"the inflow snapshot cannot reach E0 = {E0_target:.4g}: its potential energy "
             f"{pe / n:.4g} per atom leaves a temperature below T0/2",
         )
-    v *= math.sqrt(2.0 * ke / float(np.sum(v * v)))
+    v *= math.sqrt(2.0 * ke / (kit.m_kin * float(np.sum(v * v))))
     order = np.argsort(ids)
-    st = MDState(x=x[order], v=v[order], L=L.copy(), periodic=res.state.periodic)
-    snap = MDSimulation(st, lj, dt)
+    x, v = x[order], v[order]
+    snap = kit.periodic(x, v, L, dt)
     ke, pe = snap.energies()
     # The pole, measured on a copy of the snapshot released as it will be in the window.
-    run = MDSimulation(
-        MDState(x=st.x.copy(), v=st.v.copy(), L=L.copy(), periodic=st.periodic), lj, dt
-    )
+    run = kit.periodic(snap.state.x.copy(), snap.state.v.copy(), L, dt)
     series: dict[str, list[float]] = {"Pxx": [], "Pyy": [], "T": []}
     for _ in range(max(16, int(round(pole_time / (every * dt))))):
         run.advance(every)
-        f = fields_from_sums(run.profile_sums(float(L[0])), float(np.prod(L)))
-        series["Pxx"].append(float(f["Pxx"][0]))
-        series["Pyy"].append(0.5 * float(f["Pyy"][0] + f["Pzz"][0]))
-        series["T"].append(float(f["T"][0]))
+        pxx, pyy, T = kit.bulk_fields(run, L)
+        series["Pxx"].append(pxx)
+        series["Pyy"].append(pyy)
+        series["T"].append(T)
     pole = {"rho0": n / float(np.prod(L)), "rho0_err": 0.0, "E0": (ke + pe) / n, "E0_err": 0.0}
     for key, name in (("Pxx", "P0"), ("Pyy", "Pyy0"), ("T", "T0")):
         pole[name], pole[name + "_err"] = block_average(np.asarray(series[key]))
@@ -170,13 +291,14 @@ def _phase(x: np.ndarray, period: float) -> float:
 
 
 class MDWindow:
-    """A moving window around an ``MDSimulation`` (module docstring).
+    """A moving window around a particle simulation (module docstring): an ``MDSimulation``
+    or any other that ``kit`` (``ParticleKit``, default ``MDKit``) describes.
 
     Implements the window protocol of ``window.methods`` in the window frame: ``advance``,
     ``galilean_shift``, ``set_outflow``, ``count_in_window``, ``profile_sums``, checkpoints.
     ``res_x``/``res_v`` (N_res, 3): the reservoir snapshot (positions in [0, L_r) along x,
     thermal velocities in its rest frame); ``x_face_in``/``x_face``: the faces of the frozen
-    inflow copy and of the frozen outflow layer [σ].
+    inflow copy and of the frozen outflow layer [σ, or the simulation's length unit].
     """
 
     def __init__(
@@ -190,7 +312,9 @@ class MDWindow:
         x_face_in: float,
         x_face: float,
         next_id: int,
+        kit=None,
     ):
+        self.kit = kit if kit is not None else _kit_of(sim)
         self.sim = sim
         self.res_x = np.asarray(res_x, dtype=float)
         self.res_v = np.asarray(res_v, dtype=float)
@@ -276,9 +400,10 @@ class MDWindow:
         ghost_width: float,
         cut_every: float,
         sync_steps: int,
-        wall_layer: float = 4.0,
+        wall_layer: float | None = None,
         crystal: bool = False,
         lattice: float | None = None,
+        kit=None,
     ) -> MDWindow:
         """Cut a window out of a piston run (piston frame: piston at rest at the left wall,
         upstream material at −u_p) with the front at ``front_fraction`` of ``length`` from
@@ -287,10 +412,16 @@ class MDWindow:
         ``res`` is the reservoir snapshot (``make_reservoir``).
 
         For a crystal (``crystal``), the seam is placed so that the reservoir's lattice planes
-        continue the sample's (period a/2 along each axis, ``lattice`` = a)."""
-        if ghost_width < sim.lj.rc:
+        continue the sample's (period a/2 along each axis, ``lattice`` = a).
+
+        ``kit`` (default ``MDKit``) builds the domain simulation; ``wall_layer`` (default 4
+        of the kit's ``scale``) is kept clear of the piston run's walls."""
+        kit = kit if kit is not None else _kit_of(sim)
+        unit = kit.units[0]
+        wall_layer = 4.0 * kit.scale if wall_layer is None else wall_layer
+        if ghost_width < kit.rc(sim):
             raise WindowError(
-                "bad_config", f"ghost_width = {ghost_width} sigma is less than rc = {sim.lj.rc}"
+                "bad_config", f"ghost_width = {ghost_width} {unit} is less than rc = {kit.rc(sim)}"
             )
         s = sim.state
         xl, xr = sim.wall_positions()
@@ -299,7 +430,7 @@ class MDWindow:
         if lo_s - ghost_width < xl + wall_layer or hi_s > xr - wall_layer:
             raise WindowError(
                 "sample_too_short",
-                f"a window of {length:.1f} sigma around the front at {x_front:.1f} needs "
+                f"a window of {length:.1f} {unit} around the front at {x_front:.1f} needs "
                 f"[{lo_s - ghost_width:.1f}, {hi_s:.1f}] inside [{xl + wall_layer:.1f}, "
                 f"{xr - wall_layer:.1f}]: shorten the window or lengthen the sample",
             )
@@ -322,7 +453,8 @@ class MDWindow:
             target = (_phase(x[up, 0], half) + 0.25 * lattice) % half
             hi_s = hi_s - ((hi_s - target) % half)
         rx[:, 0] %= Lr
-        x_lo = ghost_width + cut_every + MARGIN
+        margin = MARGIN * kit.scale
+        x_lo = ghost_width + cut_every + margin
         shift = x_lo - (hi_s - length)
         x[:, 0] += shift
         x_hi = hi_s + shift
@@ -344,21 +476,16 @@ class MDWindow:
         x = np.concatenate([x, xi])
         v = np.concatenate([v, vi])
         ids = np.concatenate([ids, -1 - np.arange(n_res, dtype=np.int64)])
-        x, v, ids = _remove_seam_overlaps(x, v, ids, n_res, x_hi, s.L)
-        Lx = x_hi + 2.0 * Lr + 2.0 * MARGIN
+        x, v, ids = _remove_seam_overlaps(x, v, ids, n_res, x_hi, s.L, 0.8 * kit.scale)
+        Lx = x_hi + 2.0 * Lr + 2.0 * margin
         L = np.array([Lx, s.L[1], s.L[2]])
         geom = WindowGeometry(x_lo, x_hi, ghost_width, cut_every, sync_steps, Lr)
         wall_x = x_lo  # a reflecting wall at the face: no atom leaks into the layer
-        state = MDState(
-            x=x, v=v, L=L, periodic=np.array([False, True, True]),
-            walls0=np.array([wall_x, u_out, Lx, 0.0]), ids=ids,
-        )  # fmt: skip
         # The window keeps the piston run's clock (and its dt).
-        state.time, state.step = s.time, s.step
-        dom = MDSimulation(state, sim.lj, sim.dt)
+        dom = kit.domain(sim, x, v, ids, L, np.array([wall_x, u_out, Lx, 0.0]))
         dom.place_walls(wall_x, u_out, Lx, 0.0)
         return cls(dom, rx, rv, geom, u_in, u_out, x_face_in=x_hi, x_face=x_lo,
-                   next_id=int(np.count_nonzero(ids >= 0)))  # fmt: skip
+                   next_id=int(np.count_nonzero(ids >= 0)), kit=kit)  # fmt: skip
 
     # -- the time loop -------------------------------------------------------------------------
     @property
@@ -394,12 +521,14 @@ class MDWindow:
         the outflow layer when its face has moved ``cut_every`` behind ``x_lo``."""
         g, s = self.geom, self.sim.state
         if not self.u_in < 0:
-            raise WindowError("no_inflow", f"u_in = {self.u_in:.4g} sigma/tau must be < 0")
+            raise WindowError(
+                "no_inflow", f"u_in = {self.u_in:.4g} {self.kit.units[1]} must be < 0"
+            )
         if self.x_face > g.x_lo + g.cut_every:
             raise WindowError(
                 "outflow_reversed",
-                f"the outflow face moved {self.x_face - g.x_lo:.2f} sigma into the window "
-                f"(u_out = {self.u_out:.4g} sigma/tau > 0 for too long)",
+                f"the outflow face moved {self.x_face - g.x_lo:.2f} {self.kit.units[0]} into the "
+                f"window (u_out = {self.u_out:.4g} {self.kit.units[1]} > 0 for too long)",
             )
         step_travel = -self.u_in * g.sync_steps * self.sim.dt
         release = self.x_face_in < g.x_hi + step_travel
@@ -477,12 +606,13 @@ class MDWindow:
         """The complete window state: the domain, the reservoir snapshot, the boundaries;
         sealed with the format version and a checksum over all of it (``seal_checkpoint``)."""
         ds = self.sim.to_dataset(extra, attrs)
-        ds["res_x"] = (("res_atom", "xyz"), self.res_x.copy(), {"units": "sigma",
+        ln, vel = self.kit.units
+        ds["res_x"] = (("res_atom", "xyz"), self.res_x.copy(), {"units": ln,
                        "long_name": "reservoir snapshot positions"})  # fmt: skip
-        ds["res_v"] = (("res_atom", "xyz"), self.res_v.copy(), {"units": "sigma tau^-1",
+        ds["res_v"] = (("res_atom", "xyz"), self.res_v.copy(), {"units": vel,
                        "long_name": "reservoir snapshot thermal velocities"})  # fmt: skip
         ds.attrs.update(
-            window_format=MD_WINDOW_CHECKPOINT.format,
+            window_format=self.kit.window_kind.format,
             window_geometry=json.dumps(asdict(self.geom)),
             window_state=json.dumps(
                 {
@@ -502,7 +632,7 @@ class MDWindow:
                 }
             ),  # fmt: skip
         )
-        return seal_checkpoint(ds, MD_WINDOW_CHECKPOINT)  # the checksum covers the window too
+        return seal_checkpoint(ds, self.kit.window_kind)  # the checksum covers the window too
 
     def save(
         self, path: str | os.PathLike, extra: xr.Dataset | None = None, attrs: dict | None = None
@@ -511,16 +641,20 @@ class MDWindow:
         return write_netcdf(self.to_dataset(extra, attrs), path)
 
     @classmethod
-    def from_dataset(cls, ds: xr.Dataset, source: str | os.PathLike | None = None) -> MDWindow:
+    def from_dataset(
+        cls, ds: xr.Dataset, source: str | os.PathLike | None = None, kit=None
+    ) -> MDWindow:
         """Rebuild a window saved by ``save``; a foreign, outdated or altered checkpoint is
-        refused with ``CheckpointError`` naming ``source`` (default: the file of ``ds``)."""
-        verify_checkpoint(ds, source, MD_WINDOW_CHECKPOINT)
-        sim = MDSimulation.from_dataset(ds, source)
+        refused with ``CheckpointError`` naming ``source`` (default: the file of ``ds``).
+        ``kit`` (default ``MDKit``) names the checkpoint kind and loads the simulation."""
+        kit = kit if kit is not None else MDKit()
+        verify_checkpoint(ds, source, kit.window_kind)
+        sim = kit.load(ds, source)
         geom = WindowGeometry(**json.loads(ds.attrs["window_geometry"]))
         st = json.loads(ds.attrs["window_state"])
         win = cls(
             sim, ds["res_x"].values.copy(), ds["res_v"].values.copy(), geom, st["u_in"],
-            st["u_out"], st["x_face_in"], st["x_face"], st["next_id"],
+            st["u_out"], st["x_face_in"], st["x_face"], st["next_id"], kit=kit,
         )  # fmt: skip
         # the outflow's state (absent from checkpoints written before the absorbing outflow)
         for key in ("outflow", "z_out", "tau_fast", "tau_slow", "p_fast", "p_slow", "u_face",
@@ -530,10 +664,10 @@ class MDWindow:
         return win
 
     @classmethod
-    def load_path(cls, path: str | os.PathLike) -> MDWindow:
+    def load_path(cls, path: str | os.PathLike, kit=None) -> MDWindow:
         """Load a window checkpoint written by ``save`` (refused with ``CheckpointError`` if
         it is unreadable, foreign, outdated or altered)."""
-        return cls.from_dataset(read_checkpoint(path, verify=False), path)
+        return cls.from_dataset(read_checkpoint(path, verify=False), path, kit)
 
 
 def _remove_seam_overlaps(

@@ -1,0 +1,195 @@
+"""The moving window on LAMMPS: the one particle window (``md.window.MDWindow``) over a
+``LammpsSimulation``, through ``LammpsKit``; in units metal seen in SI through
+``WindowSIView``.
+
+``LammpsKit`` is what ``MDWindow`` and ``md.window.make_reservoir`` need beyond the
+simulation's interface (``md.window.ParticleKit``): the domain and the reservoir are LAMMPS
+instances of the scene's own model (``model``), the reservoir a fully periodic box
+(``LammpsSimulation(periodic_x=True)``) of the scene's FCC lattice at (ρ0, T0) under
+LAMMPS's CSVR thermostat, so the inflow of an EAM copper scene is EAM copper. Its checkpoint
+kind is ``io.checkpoint.LAMMPS_WINDOW_CHECKPOINT``. Everything is in LAMMPS's native units
+(lj: σ, τ, ε; metal: Å, ps, eV, K).
+
+Units metal: the window works natively; ``WindowSIView`` converts what crosses the seam to
+the methods (``window.methods``, ``window.steady``), each conversion one factor of
+``units.UnitSystem``: time and dt [s] = [ps]·time_s; u_in, u_out, velocities [m/s] =
+[Å/ps]·velocity_m_s; x_lo, x_hi, length, wall positions [m] = [Å]·length_m; area [m²]
+= [Å²]·length_m²; a bin width [m] → [Å] for ``profile_sums``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..io.checkpoint import LAMMPS_WINDOW_CHECKPOINT, CheckpointKind
+from .simulation import NATIVE_NAMES, LammpsSimulation
+from .units import UNIT_SYSTEMS
+
+#: The length the window set-up's fixed lengths are counted in (``md.window``: MARGIN, the
+#: seam's overlap distance, the walls' layer = 2, 0.8, 4 of these): lj 1 σ; metal 2 Å, so
+#: the walls' layer is the backend's 8 Å (``backend.WALL_LAYER``) and the seam overlap
+#: distance 1.6 Å (copper's nearest neighbours are 2.55 Å apart).
+SCALE = {"lj": 1.0, "metal": 2.0}
+
+
+class LammpsKit:
+    """``md.window.ParticleKit`` for LAMMPS: ``model`` is the scene's validated ``model``
+    block (None: only for loading a checkpoint, which carries its model)."""
+
+    window_kind: CheckpointKind = LAMMPS_WINDOW_CHECKPOINT
+
+    def __init__(self, model: dict | None, units: str = "lj") -> None:
+        self.model = None if model is None else dict(model)
+        self.usys = UNIT_SYSTEMS[units if model is None else self.model["units"]]
+        self.units = NATIVE_NAMES[self.usys.name]
+        self.scale = SCALE[self.usys.name]
+        # K = ½ m mvv2e Σ v² [energy] (lj: 1)
+        self.m_kin = 1.0 if model is None else float(self.model["mass"]) * self.usys.mvv2e
+
+    def rc(self, sim: LammpsSimulation) -> float:
+        """The model's cutoff [σ | Å]."""
+        return sim.rc
+
+    def rlist(self) -> float:
+        """Cutoff plus the neighbour skin [σ | Å]."""
+        from .scene_config import model_cutoff
+
+        return model_cutoff(self.model) + float(self.model["skin"])
+
+    def kT(self, T: float) -> float:
+        """k_B T [ε | eV] of T [ε/k_B | K]."""
+        return self.usys.k_B * T
+
+    def reservoir(
+        self, cells: tuple[int, int, int], rho0: float, T0: float, dt: float, seed: int,
+        tau_bath: float,
+    ) -> LammpsSimulation:  # fmt: skip
+        """The scene's FCC lattice at ρ0 [σ⁻³ | Å⁻³], Maxwell velocities at T0 (variance
+        k_B T0/(m mvv2e)), periodic in x, y, z, under ``fix temp/csvr`` at T0 [ε/k_B | K]."""
+        from ..md.sample import fcc_positions, maxwell_velocities
+
+        x, L = fcc_positions(cells, rho0)
+        v = maxwell_velocities(x.shape[0], self.kT(T0) / self.m_kin, seed)
+        return LammpsSimulation(
+            x, v, np.arange(x.shape[0]), L, np.array([0.0, 0.0, L[0], 0.0]), self.model, dt,
+            T_bath=T0, tau_bath=tau_bath, seed=seed, periodic_x=True,
+        )  # fmt: skip
+
+    def periodic(self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float) -> LammpsSimulation:
+        """A fully periodic NVE box of these atoms."""
+        return LammpsSimulation(x, v, np.arange(x.shape[0]), L, np.array([0.0, 0.0, L[0], 0.0]),
+                                self.model, dt, periodic_x=True)  # fmt: skip
+
+    def bulk_fields(self, run: LammpsSimulation, L: np.ndarray) -> tuple[float, float, float]:
+        """(P_xx, (P_yy + P_zz)/2 [ε σ⁻³ | eV Å⁻³], T [ε/k_B | K]) of a periodic box of
+        volume V: K_aa = m mvv2e (Σv_a² − c ū_a²), P_aa = (K_aa + ΣW_aa)/V, T = ΣK_aa/(3 (c
+        − 1) k_B) (``md.profiles`` with the mass and k_B)."""
+        s = run.profile_sums(float(L[0]))[0]
+        c = s[0]
+        ubar = s[1:4] / c
+        kin = self.m_kin * (s[4:7] - c * ubar * ubar)
+        P = (kin + s[8:11]) / float(np.prod(L))
+        return (
+            float(P[0]),
+            0.5 * float(P[1] + P[2]),
+            float(kin.sum() / (3.0 * (c - 1.0) * self.usys.k_B)),
+        )
+
+    def domain(
+        self, like: LammpsSimulation, x: np.ndarray, v: np.ndarray, ids: np.ndarray,
+        L: np.ndarray, walls0: np.ndarray,
+    ) -> LammpsSimulation:  # fmt: skip
+        """The window's domain: a new LAMMPS instance of ``like``'s model, walls along x,
+        ``like``'s clock and time step."""
+        return LammpsSimulation(x, v, ids, L, walls0, like.model, like.dt, time=like.time,
+                                step=like.step)  # fmt: skip
+
+    def load(self, ds: xr.Dataset, source: str | os.PathLike | None) -> LammpsSimulation:
+        return LammpsSimulation.from_dataset(ds, source)
+
+
+@dataclass(frozen=True)
+class SIGeometry:
+    """A window's edges in SI: x_lo, x_hi [m]."""
+
+    x_lo: float
+    x_hi: float
+
+    @property
+    def length(self) -> float:
+        return self.x_hi - self.x_lo
+
+
+class WindowSIView:
+    """A units-metal window (``md.window.MDWindow`` over a ``LammpsSimulation``) as the
+    window methods see it, in SI (module docstring); ``sim`` is the window itself."""
+
+    def __init__(self, window) -> None:
+        self.sim = window
+        self.u = window.sim.unit_system
+
+    # -- clock ---------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        return self.sim.time * self.u.time_s
+
+    @property
+    def dt(self) -> float:
+        return self.sim.dt * self.u.time_s
+
+    @property
+    def steps(self) -> int:
+        return self.sim.steps
+
+    @property
+    def n_particles(self) -> int:
+        return self.sim.n_particles
+
+    def advance(self, n_steps: int) -> None:
+        self.sim.advance(n_steps)
+
+    # -- the window ------------------------------------------------------------------------
+    @property
+    def u_in(self) -> float:
+        return self.sim.u_in * self.u.velocity_m_s
+
+    @property
+    def u_out(self) -> float:
+        return self.sim.u_out * self.u.velocity_m_s
+
+    @property
+    def geom(self) -> SIGeometry:
+        g, m = self.sim.geom, self.u.length_m
+        return SIGeometry(g.x_lo * m, g.x_hi * m)
+
+    @property
+    def area(self) -> float:
+        return self.sim.area * self.u.length_m**2
+
+    def galilean_shift(self, du: float) -> None:
+        self.sim.galilean_shift(du / self.u.velocity_m_s)
+
+    def set_outflow(self, u_out: float) -> None:
+        self.sim.set_outflow(u_out / self.u.velocity_m_s)
+
+    def count_in_window(self) -> int:
+        return self.sim.count_in_window()
+
+    def wall_positions(self) -> tuple[float, float]:
+        xl, xr = self.sim.wall_positions()
+        return xl * self.u.length_m, xr * self.u.length_m
+
+    def mean_velocity(self) -> float:
+        return self.sim.mean_velocity() * self.u.velocity_m_s
+
+    def profile_sums(self, width: float) -> np.ndarray:
+        """The raw sums (native units) over bins of ``width`` [m]."""
+        return self.sim.profile_sums(width / self.u.length_m)
+
+    def save(self, path: str | os.PathLike, extra=None, attrs=None) -> Path:
+        return self.sim.save(path, extra=extra, attrs=attrs)
