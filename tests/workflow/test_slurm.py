@@ -135,6 +135,11 @@ def test_cluster_runs_a_job_and_stops() -> None:
                            env=c.env, timeout=120)  # fmt: skip
         assert r.returncode == 0, r.stderr + c.logs()
         assert r.stdout.strip().split(".")[0] == c.node
+        # after srun returns, slurmd finishes the job's clean-up with the node "completing"
+        # for a moment (seen under load); it must then be idle, not drained or down
+        deadline = time.monotonic() + 60.0
+        while c.node_state() == "completing" and time.monotonic() < deadline:
+            time.sleep(0.5)
         assert c.node_state() == "idle"
     assert c.running() == []
     for pid in pids:  # reaped, not merely signalled
