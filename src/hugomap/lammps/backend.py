@@ -33,7 +33,9 @@ The moving-window schemes (AMW, MW, the dichotomy) run the MD backend's window,
 ``md.window.MDWindow``, over LAMMPS simulations (``lammps.window.LammpsKit``: frozen atoms
 as LAMMPS type 2 under ``fix nve/noforce``, the outflow face a rigidly moving harmonic
 wall, the inflow a reservoir made by LAMMPS with the scene's model); units metal's window is
-seen in SI through ``lammps.window.WindowSIView``. Its checkpoint is
+seen in SI through ``lammps.window.WindowSIView`` (validation refuses window schemes in
+units metal for now: the window stages pass ``shock.gap`` and ``shock.avg_length`` to the
+steady average in the scene's Å while the frame is SI). Its checkpoint is
 ``hugomap-lammps-window/1``. The absorbing outflow is refused at validation (the wall's
 impulse is not measured).
 
