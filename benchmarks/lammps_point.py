@@ -73,7 +73,7 @@ def run_backend(solver: str, cells: list[int], window: bool, d: Path) -> list[di
     files = {"piston": d / "piston.nc"}
     if window:
         stages.window_start(d / "loaded.nc", sc, U_P, d / "window.nc")
-        stages.control_point(d / "window.nc", sc, U_P, "amw", d / "amw.nc")
+        stages.control_point(d / "window.nc", sc, U_P, d / "amw.nc", "amw")
         files["amw"] = d / "amw.nc"
     rows = []
     for stage, path in files.items():
