@@ -281,6 +281,7 @@ class MDBackend:
             (s["cells"][1], s["cells"][2]), pole.rho0 if fluid else s["rho0"], s["T0"],
             solver.lj, solver.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"],
             s["thermostat_tau"], E0_target=pole.E0 if fluid else None,
+            min_length=w["reservoir_length"],
         )  # fmt: skip
         log.info("inflow pole: %s", json.dumps(inflow))
         win = MDWindow.from_piston(
