@@ -217,3 +217,16 @@ def test_a_disturbed_state_ahead_is_named_unless_two_wave():
     quiet = {**v, "ahead_P_err": 0.2, "ahead_u_err": 0.03}
     assert named_causes(quiet, 0.01, pole=pole) == []
     assert named_causes(v, 0.03, pole=pole) == []
+
+
+def test_a_run_without_any_slab_is_too_few_samples_not_an_error():
+    """A front always nearer the boundaries than gap + the least slab (a window too short for
+    its ``shock.gap``): no sample has a slab on either side, and the point is
+    ``too_few_samples`` with NaN fields, not a KeyError from a field no slab supplied."""
+    from hugomap.analysis.shock import measure_point
+
+    h, pole = _toy_run(0.0, 0.002)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=60.0, avg_length=20.0,
+                      residual_tol=0.01)  # fmt: skip
+    assert r["status"] == "too_few_samples", r["diagnostic"]
+    assert np.isnan(r["P"]) and np.isnan(r["Pyy"]) and np.isnan(r["shear_stress"])

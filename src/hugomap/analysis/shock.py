@@ -417,7 +417,9 @@ def measure_point(
         ahead.append(sa)
         halves["behind"].append(hb)
         halves["ahead"].append(ha)
-    keys = next((list(s) for s in behind + ahead if s is not None), ["rho", "u", "P", "E"])
+    # no slab in any sample: the fields every point has, NaN (status too_few_samples)
+    keys = next((list(s) for s in behind + ahead if s is not None),
+                ["rho", "u", "P", "E", "Pyy", "Pzz", "T"])  # fmt: skip
 
     def series(states: list[SlabState | None], k: str) -> np.ndarray:
         return np.array([np.nan if s is None else s[k] for s in states], dtype=float)
