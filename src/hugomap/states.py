@@ -104,7 +104,9 @@ class ControlParams:
     ``max_drift`` (the front-speed resolution a calm window must reach), AMW's ``beta``, MW's
     ``gain_rate`` (dimensionless) and ``gain_position`` (per unit time) and ``target`` (the
     front's place in the window, ω*); ``outflow_gap``: the measured slab behind the front
-    stays this far from the outflow edge."""
+    stays this far from the outflow edge; ``gap`` and ``avg_length``: the measured slabs'
+    distance from the front and their length (``shock.gap``, ``shock.avg_length``), in the
+    window's length unit, as ``PistonFrame`` carries them for a piston run."""
 
     window_time: float
     average_time: float
@@ -120,11 +122,14 @@ class ControlParams:
     gain_position: float
     target: float
     outflow_gap: float
+    gap: float
+    avg_length: float
 
     @classmethod
     def from_window(
-        cls, w: dict, length: float, gap: float, times: tuple[float, float] | None = None
-    ) -> ControlParams:
+        cls, w: dict, length: float, gap: float, avg_length: float,
+        times: tuple[float, float] | None = None,
+    ) -> ControlParams:  # fmt: skip
         """From a validated ``window`` block: ``times`` (window_time, average_time) where the
         backend derives them, else the configured ones; the dichotomy's trial as long as one
         averaging window and its final average as AMW/MW's unless configured; max_drift =
@@ -140,7 +145,7 @@ class ControlParams:
             max_drift=w["drift_fraction"] * length / avg, beta=w["amw"]["beta"],
             gain_rate=float(w["mw"]["gain_rate"]),
             gain_position=float(w["mw"]["gain_position"]) / wt, target=w["front_fraction"],
-            outflow_gap=w.get("outflow_gap") or gap,
+            outflow_gap=w.get("outflow_gap") or gap, gap=gap, avg_length=avg_length,
         )  # fmt: skip
 
 

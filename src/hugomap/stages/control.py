@@ -49,7 +49,7 @@ def control_point(
                            target=cp.target, **common)  # fmt: skip
         if res.converged:
             values, h = steady_state(win, profile, pole, sig, cp.average_time, cp.every,
-                                     sh["gap"], sh["avg_length"], sh["residual_tol"],
+                                     cp.gap, cp.avg_length, sh["residual_tol"],
                                      cp.outflow_gap)  # fmt: skip
             status, diagnostic = str(values.pop("status")), str(values.pop("diagnostic"))
             log.info("%s: D = %.6g +- %.2g, u_p = %.6g, P = %.6g, %s", scheme, values["D"],

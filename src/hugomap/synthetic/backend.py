@@ -109,8 +109,9 @@ class SyntheticBackend:
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
         """The configured times (``ControlParams.from_window``)."""
-        return ControlParams.from_window(scene["window"], window.geom.length,
-                                         scene["shock"]["gap"])  # fmt: skip
+        sh = scene["shock"]
+        return ControlParams.from_window(scene["window"], window.geom.length, sh["gap"],
+                                         sh["avg_length"])  # fmt: skip
 
     def reference_inputs(self, scene: dict) -> None:
         return None
