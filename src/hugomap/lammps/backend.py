@@ -343,7 +343,7 @@ class LammpsBackend:
         res, inflow = make_reservoir(
             (s["cells"][1], s["cells"][2]), rho_n if fluid else s["rho0"], s["T0"], None,
             sim.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"], s["thermostat_tau"],
-            E0_target=e_n if fluid else None, kit=kit,
+            E0_target=e_n if fluid else None, kit=kit, min_length=w["reservoir_length"],
         )  # fmt: skip
         inflow = self._pole_from_native(scene, inflow)
         log.info("inflow pole: %s", json.dumps(inflow))
