@@ -114,7 +114,8 @@ def test_si_view_of_a_copper_piston(tmp_path: Path) -> None:
     wall has moved 0.1 Å = 1e-11 m; the checkpoint (native units, ``lammps_units``) loads
     back as an SI view of the same state."""
     from hugomap.lammps.backend import METAL_BACKEND
-    from hugomap.lammps.simulation import LammpsSimulation, SIView
+    from hugomap.lammps.si import SIView
+    from hugomap.lammps.simulation import LammpsSimulation
     from hugomap.md.sample import fcc_positions, maxwell_velocities
 
     sc = _validated(_scene())

@@ -166,8 +166,9 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
     control times of the scene's window block [ps] arrive in s; the checkpoint loads back
     as the same SI view."""
     from hugomap.lammps.backend import METAL_BACKEND
+    from hugomap.lammps.si import WindowSIView
     from hugomap.lammps.simulation import LammpsSimulation
-    from hugomap.lammps.window import LammpsKit, WindowSIView
+    from hugomap.lammps.window import LammpsKit
     from hugomap.md.sample import fcc_positions, maxwell_velocities
     from hugomap.md.window import MDWindow, make_reservoir
 

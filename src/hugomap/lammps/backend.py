@@ -9,7 +9,7 @@ scene):
 - units metal (Å, ps, eV, g/mol, K; e.g. copper with ``pair_style eam/alloy``):
   ``MetalBackend``, datasets in SI (``io.dataset.si_units``: m, s, kg m⁻³, Pa, J kg⁻¹, K;
   ``unit_system`` names LAMMPS units metal). The simulation keeps LAMMPS's units; the
-  shock methods see it through ``simulation.SIView`` (time [s], positions [m], velocities
+  shock methods see it through ``si.SIView`` (time [s], positions [m], velocities
   [m/s]) and read its raw sums through ``MetalProfile`` (ρ [kg/m³], u [m/s], P [Pa], E
   [J/kg], T [K]), so D, u_p and the jump residuals are measured in one coherent system.
   Scene keys keep LAMMPS's units (lengths Å, times ps, T0 K, mass g/mol, ``sample.rho0``
@@ -33,9 +33,8 @@ The moving-window schemes (AMW, MW, the dichotomy) run the MD backend's window,
 ``md.window.MDWindow``, over LAMMPS simulations (``lammps.window.LammpsKit``: frozen atoms
 as LAMMPS type 2 under ``fix nve/noforce``, the outflow face a rigidly moving harmonic
 wall, the inflow a reservoir made by LAMMPS with the scene's model); units metal's window is
-seen in SI through ``lammps.window.WindowSIView`` (validation refuses window schemes in
-units metal for now: the window stages pass ``shock.gap`` and ``shock.avg_length`` to the
-steady average in the scene's Å while the frame is SI). Its checkpoint is
+seen in SI through ``si.WindowSIView``, and ``control_params`` gives the stages
+the measured slabs' lengths in the frame's units (m). Its checkpoint is
 ``hugomap-lammps-window/1``. The absorbing outflow is refused at validation (the wall's
 impulse is not measured).
 
@@ -56,7 +55,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..analysis.shock import bin_edges, slab_state, track_front
+from ..analysis.shock import bin_edges, slab_state
 from ..analysis.stats import block_average
 from ..io.dataset import UnitTable, lj_units, si_units
 from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
@@ -358,21 +357,14 @@ class LammpsBackend:
         wpole = pole if fluid else Pole.from_dict(inflow)
         win.advance(int(round(w["settle_time"] / win.dt)))  # [τ | ps] / [τ | ps]
         view = self.window_view(win)
-        g, prof = view.geom, self.profile(view, scene)
-        sums = prof.sums(view)
-        x_f = track_front(prof, sums, g.x_lo, g.x_hi, view.u_out, view.u_in)
-        if not np.isfinite(x_f):
-            x_f = g.x_lo + w["front_fraction"] * g.length
-        edges = bin_edges(prof, sums.shape[0])
-        gap = self._length(sh["gap"])
-        shocked = slab_state(prof, sums, edges, g.x_lo + 0.5 * gap, x_f - 0.5 * gap)
-        if w["omega"] == "N":  # q = atoms in the window
-            up = self._count_density(scene, wpole.rho0)
-            sh_q = self._count_density(scene, shocked["rho"])
+        if w["omega"] == "N":  # q = atoms in the window: a number density
+            up, q_of = self._count_density(scene, wpole.rho0), (
+                lambda st: self._count_density(scene, st["rho"]))  # fmt: skip
         else:  # q = Σ P_xx over the window's volume
-            up, sh_q = wpole.P0, shocked["P"]
-        vol = view.area * g.length
-        sig = OmegaSignal(w["omega"], up * vol, sh_q * vol, prof.bin_width, prof)
+            up, q_of = wpole.P0, (lambda st: st["P"])
+        sig = OmegaSignal.from_settled(view, self.profile(view, scene), w["omega"],
+                                       self._length(sh["gap"]), w["front_fraction"], up,
+                                       q_of)  # fmt: skip
         return WindowStart(view, wpole, sig, {f"inflow_{k}": v for k, v in inflow.items()})
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
@@ -570,14 +562,15 @@ class MetalBackend(LammpsBackend):
     reference_from_sample = False
 
     def view(self, sim):
-        """The simulation in SI (``simulation.SIView``)."""
-        from .simulation import SIView, native
+        """The simulation in SI (``si.SIView``)."""
+        from .si import SIView
+        from .simulation import native
 
         return SIView(native(sim))
 
     def window_view(self, win):
-        """The window in SI (``window.WindowSIView``)."""
-        from .window import WindowSIView
+        """The window in SI (``si.WindowSIView``)."""
+        from .si import WindowSIView
 
         return WindowSIView(win)
 

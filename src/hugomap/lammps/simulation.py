@@ -75,7 +75,7 @@ from ..io.checkpoint import (
 from .scene_config import PAIR_STYLES, pair_style_name, resolved_pair_coeff
 from .units import UNIT_SYSTEMS
 
-__all__ = ["LAMMPS_CHECKPOINT", "LammpsSimulation", "SIView", "lammps_class", "native"]
+__all__ = ["LAMMPS_CHECKPOINT", "LammpsSimulation", "lammps_class", "native"]
 
 #: Right (soft) wall, per unit system: stiffness K [energy/length²] and how far beyond the
 #: wall the box extends (``pad`` [length]). lj: ω = √(2K/m) = 45 τ⁻¹, ω Δt ≤ 0.18 at the
@@ -648,58 +648,6 @@ class _StateView:
     @property
     def impulse(self) -> np.ndarray:
         return np.full(2, np.nan)
-
-
-class SIView:
-    """A units-metal ``LammpsSimulation`` seen in SI by the shock methods
-    (``window.protocol.ShockSolver``): time [s], wall positions [m], velocities [m/s]; the
-    simulation underneath (``sim``) keeps LAMMPS's units (Å, ps) and its raw profile sums
-    (read by ``backend.MetalProfile``, which converts them). Each conversion is one factor
-    of ``units.UnitSystem``: t = t_ps · time_s, x = x_Å · length_m, u = u_Å/ps ·
-    velocity_m_s."""
-
-    def __init__(self, sim: LammpsSimulation) -> None:
-        self.sim = sim
-        self.u = sim.unit_system
-
-    @property
-    def time(self) -> float:
-        return self.sim.time * self.u.time_s
-
-    @property
-    def steps(self) -> int:
-        return self.sim.steps
-
-    @property
-    def n_particles(self) -> int:
-        return self.sim.n_particles
-
-    @property
-    def dt(self) -> float:
-        return self.sim.dt * self.u.time_s
-
-    def advance(self, n_steps: int) -> None:
-        self.sim.advance(n_steps)
-
-    def wall_positions(self) -> tuple[float, float]:
-        xl, xr = self.sim.wall_positions()
-        return xl * self.u.length_m, xr * self.u.length_m
-
-    def set_walls(self, v_left: float, v_right: float) -> None:
-        self.sim.set_walls(v_left / self.u.velocity_m_s, v_right / self.u.velocity_m_s)
-
-    def mean_velocity(self) -> float:
-        return self.sim.mean_velocity() * self.u.velocity_m_s
-
-    def galilean_shift(self, du: float) -> None:
-        self.sim.galilean_shift(du / self.u.velocity_m_s)
-
-    def profile_sums(self, width: float) -> np.ndarray:
-        """The simulation's raw sums (native units) over bins of ``width`` [m]."""
-        return self.sim.profile_sums(width / self.u.length_m)
-
-    def save(self, path: str | os.PathLike, extra=None, attrs=None) -> Path:
-        return self.sim.save(path, extra=extra, attrs=attrs)
 
 
 def native(solver) -> LammpsSimulation:

@@ -1,6 +1,6 @@
 """The moving window on LAMMPS: the one particle window (``md.window.MDWindow``) over a
 ``LammpsSimulation``, through ``LammpsKit``; in units metal seen in SI through
-``WindowSIView``.
+``si.WindowSIView``.
 
 ``LammpsKit`` is what ``MDWindow`` and ``md.window.make_reservoir`` need beyond the
 simulation's interface (``md.window.ParticleKit``): the domain and the reservoir are LAMMPS
@@ -10,18 +10,12 @@ LAMMPS's CSVR thermostat, so the inflow of an EAM copper scene is EAM copper. It
 kind is ``io.checkpoint.LAMMPS_WINDOW_CHECKPOINT``. Everything is in LAMMPS's native units
 (lj: σ, τ, ε; metal: Å, ps, eV, K).
 
-Units metal: the window works natively; ``WindowSIView`` converts what crosses the seam to
-the methods (``window.methods``, ``window.steady``), each conversion one factor of
-``units.UnitSystem``: time and dt [s] = [ps]·time_s; u_in, u_out, velocities [m/s] =
-[Å/ps]·velocity_m_s; x_lo, x_hi, length, wall positions [m] = [Å]·length_m; area [m²]
-= [Å²]·length_m²; a bin width [m] → [Å] for ``profile_sums``.
+Units metal: the window works natively; ``si.WindowSIView`` converts what crosses the seam.
 """
 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -111,85 +105,3 @@ class LammpsKit:
 
     def load(self, ds: xr.Dataset, source: str | os.PathLike | None) -> LammpsSimulation:
         return LammpsSimulation.from_dataset(ds, source)
-
-
-@dataclass(frozen=True)
-class SIGeometry:
-    """A window's edges in SI: x_lo, x_hi [m]."""
-
-    x_lo: float
-    x_hi: float
-
-    @property
-    def length(self) -> float:
-        return self.x_hi - self.x_lo
-
-
-class WindowSIView:
-    """A units-metal window (``md.window.MDWindow`` over a ``LammpsSimulation``) as the
-    window methods see it, in SI (module docstring); ``sim`` is the window itself."""
-
-    def __init__(self, window) -> None:
-        self.sim = window
-        self.u = window.sim.unit_system
-
-    # -- clock ---------------------------------------------------------------------------
-    @property
-    def time(self) -> float:
-        return self.sim.time * self.u.time_s
-
-    @property
-    def dt(self) -> float:
-        return self.sim.dt * self.u.time_s
-
-    @property
-    def steps(self) -> int:
-        return self.sim.steps
-
-    @property
-    def n_particles(self) -> int:
-        return self.sim.n_particles
-
-    def advance(self, n_steps: int) -> None:
-        self.sim.advance(n_steps)
-
-    # -- the window ------------------------------------------------------------------------
-    @property
-    def u_in(self) -> float:
-        return self.sim.u_in * self.u.velocity_m_s
-
-    @property
-    def u_out(self) -> float:
-        return self.sim.u_out * self.u.velocity_m_s
-
-    @property
-    def geom(self) -> SIGeometry:
-        g, m = self.sim.geom, self.u.length_m
-        return SIGeometry(g.x_lo * m, g.x_hi * m)
-
-    @property
-    def area(self) -> float:
-        return self.sim.area * self.u.length_m**2
-
-    def galilean_shift(self, du: float) -> None:
-        self.sim.galilean_shift(du / self.u.velocity_m_s)
-
-    def set_outflow(self, u_out: float) -> None:
-        self.sim.set_outflow(u_out / self.u.velocity_m_s)
-
-    def count_in_window(self) -> int:
-        return self.sim.count_in_window()
-
-    def wall_positions(self) -> tuple[float, float]:
-        xl, xr = self.sim.wall_positions()
-        return xl * self.u.length_m, xr * self.u.length_m
-
-    def mean_velocity(self) -> float:
-        return self.sim.mean_velocity() * self.u.velocity_m_s
-
-    def profile_sums(self, width: float) -> np.ndarray:
-        """The raw sums (native units) over bins of ``width`` [m]."""
-        return self.sim.profile_sums(width / self.u.length_m)
-
-    def save(self, path: str | os.PathLike, extra=None, attrs=None) -> Path:
-        return self.sim.save(path, extra=extra, attrs=attrs)

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..analysis.shock import bin_edges, slab_state, track_front
+from ..analysis.shock import bin_edges, slab_state
 from ..analysis.stats import block_average
 from ..io.dataset import lj_units
 from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
@@ -296,17 +296,11 @@ class MDBackend:
             win.set_absorbing(wpole.rho0 * D_guess, o["tau_fast"], o["tau_slow"],
                               wpole.P0 + wpole.rho0 * D_guess * u_p)  # fmt: skip
         win.advance(int(round(w["settle_time"] / win.dt)))
-        g, prof = win.geom, self.profile(win, scene)
-        sums = prof.sums(win)
-        x_f = track_front(prof, sums, g.x_lo, g.x_hi, win.u_out, win.u_in)
-        if not np.isfinite(x_f):
-            x_f = g.x_lo + w["front_fraction"] * g.length
-        edges = bin_edges(prof, sums.shape[0])
-        shocked = slab_state(prof, sums, edges, g.x_lo + 0.5 * sh["gap"], x_f - 0.5 * sh["gap"])
         key = "rho" if w["omega"] == "N" else "P"
-        up = wpole.rho0 if key == "rho" else wpole.P0
-        sig = OmegaSignal(w["omega"], up * win.area * g.length,
-                          shocked[key] * win.area * g.length, sh["bin_width"], prof)  # fmt: skip
+        sig = OmegaSignal.from_settled(
+            win, self.profile(win, scene), w["omega"], sh["gap"], w["front_fraction"],
+            wpole.rho0 if key == "rho" else wpole.P0, lambda st: st[key],
+        )  # fmt: skip
         return WindowStart(win, wpole, sig, {f"inflow_{k}": v for k, v in inflow.items()})
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:

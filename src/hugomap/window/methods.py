@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.shock import bin_edges
+from ..analysis.shock import bin_edges, slab_state, track_front
 from ..analysis.stats import CorrelatedSlope
 
 log = logging.getLogger("hugomap")
@@ -80,6 +80,27 @@ class OmegaSignal:
     def __call__(self, solver) -> float:
         """ω = (x_f − x_lo)/L estimated from the signal (dimensionless)."""
         return (self.raw(solver) - self.q_up) / (self.q_sh - self.q_up)
+
+    @classmethod
+    def from_settled(
+        cls, win, profile, kind: str, gap: float, front_fraction: float, q_up: float,
+        q_of: Callable[[object], float],
+    ) -> OmegaSignal:  # fmt: skip
+        """Normalised on a settled window: q_sh from the shocked slab between the outflow
+        edge and the front, ``gap``/2 clear of both (the front tracked on the window's
+        profile; where none is found, at ``front_fraction`` of L), read by ``q_of`` from the
+        slab's state (per unit volume: a number density for "N", P_xx for "stress");
+        ``q_up`` per unit volume of the upstream material. Both times the window's volume
+        A L; ``gap`` in the window's length unit."""
+        g = win.geom
+        sums = profile.sums(win)
+        x_f = track_front(profile, sums, g.x_lo, g.x_hi, win.u_out, win.u_in)
+        if not np.isfinite(x_f):
+            x_f = g.x_lo + front_fraction * g.length
+        edges = bin_edges(profile, sums.shape[0])
+        shocked = slab_state(profile, sums, edges, g.x_lo + 0.5 * gap, x_f - 0.5 * gap)
+        return cls(kind, q_up * win.area * g.length, q_of(shocked) * win.area * g.length,
+                   profile.bin_width, profile)  # fmt: skip
 
 
 @dataclass
