@@ -61,10 +61,12 @@ _POLE_NAMES = frozenset([*POLE_KEYS, *(k + "_err" for k in POLE_KEYS)])
 @dataclass(frozen=True)
 class Resources:
     """Cluster resources of one job: ``mem_mb`` [MiB] and ``cpu_s``, the CPU seconds of one
-    thread (an upper bound; the workflow divides by the job's threads)."""
+    thread (an upper bound; the workflow divides by the job's threads); ``ranks``: MPI ranks
+    (the workflow starts the job with ``mpiexec -n ranks`` when > 1, one thread each)."""
 
     mem_mb: int
     cpu_s: float
+    ranks: int = 1
 
 
 @dataclass(frozen=True)

@@ -292,6 +292,29 @@ def test_written_files_honour_the_umask(tmp_path: Path, mask: int, mode: int) ->
     assert not list(tmp_path.rglob("*.tmp"))
 
 
+@pytest.mark.parametrize(
+    ("env", "writes"),
+    [({}, True), ({"PMI_RANK": "0"}, True), ({"PMI_RANK": "1"}, False),
+     ({"OMPI_COMM_WORLD_RANK": "3"}, False), ({"PMIX_RANK": "0"}, True)],
+)  # fmt: skip
+def test_only_mpi_rank_0_writes(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, env: dict, writes: bool
+) -> None:
+    """The ranks of a LAMMPS stage under ``mpiexec`` run the same stage: rank 0 alone writes
+    (the launcher's rank variable, ``io.atomic.RANK_VARIABLES``); outside MPI every write
+    happens."""
+    from hugomap.io.atomic import RANK_VARIABLES
+
+    for name in RANK_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    for name, value in env.items():
+        monkeypatch.setenv(name, value)
+    out = write_json({"a": 1}, tmp_path / "x.json")
+    assert out == tmp_path / "x.json"
+    assert out.exists() is writes
+    assert not list(tmp_path.rglob("*.tmp"))
+
+
 # -- many files as one ---------------------------------------------------------------------
 def test_open_scenes_and_points(tmp_path: Path) -> None:
     """Two scenes whose references (3 and 5 points) and piston velocities differ open as one

@@ -1,6 +1,7 @@
 # Turn the validated config into targets and job parameters.
 import json
 import math
+from pathlib import Path
 
 PY = sys.executable
 RES = "results"
@@ -48,7 +49,7 @@ def all_targets():
         out += [
             f"{RES}/figures/{scene}/up{up_tag(u)}_{scheme}_history.png"
             for scheme in schemes
-            if scheme != "piston"
+            if scheme not in ("piston", "msst", "nphug")  # no control history
             for u in config["scenes"][scene]["shock"]["u_p"]
         ]
     if "campaign" in config:  # its dataset and figures (rule campaign)
@@ -87,6 +88,51 @@ def stage_runtime(stage):
         return attempt * int(math.ceil(STARTUP_MIN + cpu_s / threads / 60.0))
 
     return runtime
+
+
+# MPI: a backend whose job asks for ranks > 1 (Resources.ranks: LAMMPS scenes with `ranks`)
+# runs under `mpiexec -n ranks` (the mpich wheel's, beside this Python, else the one on
+# PATH), one thread a rank, its ranks reserved as the job's threads. The SLURM executor reads
+# resources `mpi` (the launcher, also a sign to start the job's command as it is, not in an
+# srun step of one task), `tasks` (--ntasks) and `cpus_per_task`.
+MPIEXEC = next((str(p) for p in [Path(PY).parent / "mpiexec"] if p.exists()), "mpiexec")
+
+
+def _ranks(wildcards, stage):
+    return _cost(config["scenes"][wildcards.scene], stage).ranks
+
+
+def stage_threads(stage):
+    """Threads of a stage's job: its MPI ranks, or the config's `threads` without MPI."""
+
+    def threads(wildcards):
+        ranks = _ranks(wildcards, stage)
+        return ranks if ranks > 1 else config["threads"]
+
+    return threads
+
+
+def stage_tasks(stage):
+    """SLURM tasks of a stage's job: its MPI ranks."""
+    return lambda wildcards: _ranks(wildcards, stage)
+
+
+def stage_cpus_per_task(stage):
+    """SLURM cpus per task: one per rank under MPI, else the job's threads."""
+    return lambda wildcards, threads: 1 if _ranks(wildcards, stage) > 1 else threads
+
+
+def stage_mpi(stage):
+    """The MPI launcher of a stage's job under MPI, else "" (no launcher)."""
+    return lambda wildcards: MPIEXEC if _ranks(wildcards, stage) > 1 else ""
+
+
+def stage_command(wildcards, threads, resources):
+    """How a stage's job starts Python: under MPI `NUMBA_NUM_THREADS=1 <mpi> -n <tasks>`,
+    else with the job's threads for numba."""
+    if resources.mpi:
+        return f"NUMBA_NUM_THREADS=1 {resources.mpi} -n {resources.tasks} {PY}"
+    return f"NUMBA_NUM_THREADS={threads} {PY}"
 
 
 # A reference that is a run of its own (equilibrium MD) is computed once per distinct set

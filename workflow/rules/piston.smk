@@ -13,15 +13,18 @@ rule prepare_sample:
         f"{RES}/logs/{{scene}}/prepare.log",
     conda:
         "../envs/hugomap.yaml"
-    threads: config["threads"]
+    threads: stage_threads("prepare")
     resources:
         mem_mb=stage_mem_mb("prepare"),
         runtime=stage_runtime("prepare"),
+        tasks=stage_tasks("prepare"),
+        cpus_per_task=stage_cpus_per_task("prepare"),
+        mpi=stage_mpi("prepare"),
     params:
-        py=PY,
+        run=stage_command,
         scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap prepare --scene-name {wildcards.scene}"
+        "{params.run} -m hugomap prepare --scene-name {wildcards.scene}"
         " --scene-json {params.scene:q} --out {output} > {log} 2>&1"
 
 
@@ -34,15 +37,18 @@ rule load_to_target:
         f"{RES}/logs/{{scene}}/up{{up}}/load.log",
     conda:
         "../envs/hugomap.yaml"
-    threads: config["threads"]
+    threads: stage_threads("load")
     resources:
         mem_mb=stage_mem_mb("load"),
         runtime=stage_runtime("load"),
+        tasks=stage_tasks("load"),
+        cpus_per_task=stage_cpus_per_task("load"),
+        mpi=stage_mpi("load"),
     params:
-        py=PY,
+        run=stage_command,
         scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap load --scene-name {wildcards.scene}"
+        "{params.run} -m hugomap load --scene-name {wildcards.scene}"
         " --scene-json {params.scene:q} --sample {input} --u-p {wildcards.up}"
         " --out {output} > {log} 2>&1"
 
@@ -56,15 +62,18 @@ rule piston_point:
         f"{RES}/logs/{{scene}}/up{{up}}/piston.log",
     conda:
         "../envs/hugomap.yaml"
-    threads: config["threads"]
+    threads: stage_threads("piston")
     resources:
         mem_mb=stage_mem_mb("piston"),
         runtime=stage_runtime("piston"),
+        tasks=stage_tasks("piston"),
+        cpus_per_task=stage_cpus_per_task("piston"),
+        mpi=stage_mpi("piston"),
     params:
-        py=PY,
+        run=stage_command,
         scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap piston --scene-name {wildcards.scene}"
+        "{params.run} -m hugomap piston --scene-name {wildcards.scene}"
         " --scene-json {params.scene:q} --loaded {input} --u-p {wildcards.up}"
         " --out {output} > {log} 2>&1"
 

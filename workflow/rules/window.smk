@@ -17,12 +17,16 @@ rule window_start:
         f"{RES}/logs/{{scene}}/up{{up}}/window.log",
     conda:
         "../envs/hugomap.yaml"
-    threads: config["threads"]
+    threads: stage_threads("window")
+    resources:
+        tasks=stage_tasks("window"),
+        cpus_per_task=stage_cpus_per_task("window"),
+        mpi=stage_mpi("window"),
     params:
-        py=PY,
+        run=stage_command,
         scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap window --scene-name {wildcards.scene}"
+        "{params.run} -m hugomap window --scene-name {wildcards.scene}"
         " --scene-json {params.scene:q} --loaded {input} --u-p {wildcards.up}"
         " --out {output} > {log} 2>&1"
 
@@ -38,12 +42,16 @@ rule control_point:
         scheme="amw|mw",
     conda:
         "../envs/hugomap.yaml"
-    threads: config["threads"]
+    threads: stage_threads("control")
+    resources:
+        tasks=stage_tasks("control"),
+        cpus_per_task=stage_cpus_per_task("control"),
+        mpi=stage_mpi("control"),
     params:
-        py=PY,
+        run=stage_command,
         scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap {wildcards.scheme}"
+        "{params.run} -m hugomap {wildcards.scheme}"
         " --scene-name {wildcards.scene} --scene-json {params.scene:q} --window {input}"
         " --u-p {wildcards.up} --out {output} > {log} 2>&1"
 
@@ -83,12 +91,16 @@ rule dichotomy_trial:
         f"{RES}/logs/{{scene}}/up{{up}}/dichotomy_trial{{k}}_{{i}}.log",
     conda:
         "../envs/hugomap.yaml"
-    threads: config["threads"]
+    threads: stage_threads("dichotomy")
+    resources:
+        tasks=stage_tasks("dichotomy"),
+        cpus_per_task=stage_cpus_per_task("dichotomy"),
+        mpi=stage_mpi("dichotomy"),
     params:
-        py=PY,
+        run=stage_command,
         scene=scene_json,
     shell:
-        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap dichotomy-trial"
+        "{params.run} -m hugomap dichotomy-trial"
         " --scene-name {wildcards.scene} --scene-json {params.scene:q} --window {input.window}"
         " --state {input.state} --index {wildcards.i} --out {output} > {log} 2>&1"
 
@@ -102,9 +114,13 @@ rule dichotomy_point:
         f"{RES}/logs/{{scene}}/up{{up}}/dichotomy.log",
     conda:
         "../envs/hugomap.yaml"
-    threads: config["threads"]
+    threads: stage_threads("dichotomy")
+    resources:
+        tasks=stage_tasks("dichotomy"),
+        cpus_per_task=stage_cpus_per_task("dichotomy"),
+        mpi=stage_mpi("dichotomy"),
     params:
-        py=PY,
+        run=stage_command,
         scene=scene_json,
         # from params, not {input.*}: a dry run (-n) formats this command before the loop's
         # states exist, when the input function could not yet name them
@@ -114,6 +130,6 @@ rule dichotomy_point:
             " ".join(input.trials) if "trials" in input.keys() else ""
         ),
     shell:
-        "NUMBA_NUM_THREADS={threads} {params.py} -m hugomap dichotomy-point"
+        "{params.run} -m hugomap dichotomy-point"
         " --scene-name {wildcards.scene} --scene-json {params.scene:q} --window {params.window}"
         " --u-p {wildcards.up} --state {params.state} --out {output} {params.trials} > {log} 2>&1"

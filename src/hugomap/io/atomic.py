@@ -6,6 +6,10 @@ plain ``open`` would give it, ``0o666 & ~umask`` (``mkstemp`` makes its temporar
 ``0o600``), so a group that shares a results folder with ``umask 002`` or ``027`` can read
 it. A dataset that declares CF conventions (``Conventions = "CF-…"``: point files,
 aggregates, campaign datasets) is written through ``io.dataset.cf_dataset``.
+
+Under MPI (a LAMMPS stage started by ``mpiexec -n N``) every rank runs the same stage and
+holds the same results; rank 0 alone writes (``mpi_rank``), so N ranks never race for one
+file.
 """
 
 from __future__ import annotations
@@ -36,6 +40,31 @@ def umask() -> int:
     return old
 
 
+#: Where MPI launchers give a process its rank and their number: MPICH's Hydra (the
+#: ``mpich`` wheel's ``mpiexec``) and Intel MPI ``PMI_RANK``/``PMI_SIZE``, PMIx launchers
+#: ``PMIX_RANK``, Open MPI ``OMPI_COMM_WORLD_RANK``/``OMPI_COMM_WORLD_SIZE``.
+RANK_VARIABLES = ("PMI_RANK", "PMIX_RANK", "OMPI_COMM_WORLD_RANK")
+SIZE_VARIABLES = ("PMI_SIZE", "OMPI_COMM_WORLD_SIZE")
+
+
+def _env_int(names: tuple[str, ...], default: int) -> int:
+    for name in names:
+        value = os.environ.get(name, "")
+        if value.isdigit():
+            return int(value)
+    return default
+
+
+def mpi_rank() -> int:
+    """This process's MPI rank, from its launcher's environment (0 outside MPI)."""
+    return _env_int(RANK_VARIABLES, 0)
+
+
+def mpi_size() -> int:
+    """The number of MPI ranks this process runs among (1 outside MPI)."""
+    return _env_int(SIZE_VARIABLES, 1)
+
+
 def _mode() -> int:
     return 0o666 & ~umask()
 
@@ -43,8 +72,10 @@ def _mode() -> int:
 def _write(path: str | os.PathLike, fill: Callable[[str], None]) -> Path:
     """The one atomic write: ``fill(tmp)`` writes a temporary file in the target's folder,
     which gets mode ``0o666 & ~umask`` and is renamed onto ``path``; a failed write leaves
-    no partial file at ``path``."""
+    no partial file at ``path``. On an MPI rank other than 0 nothing is written."""
     path = Path(path)
+    if mpi_rank() != 0:
+        return path
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)

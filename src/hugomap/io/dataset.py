@@ -75,6 +75,7 @@ POINT_VARS: dict[str, tuple[str, str]] = {
     "wall_s": ("s", "wall-clock time of the point (load + drive)"),
     "cpu_s": ("s", "CPU time of the point (load + drive), all threads"),
     "atom_steps": ("1", "atoms x time steps of the point (load + drive)"),
+    "ranks": ("1", "MPI ranks of the point's last job (1: no MPI)"),
     "piston_velocity": ("sigma tau^-1", "nominal piston velocity"),
 }
 POLE_VARS: dict[str, tuple[str, str]] = {

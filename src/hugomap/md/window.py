@@ -381,8 +381,10 @@ class MDWindow:
     def _move_layer(self, u_face: float) -> None:
         s = self.sim.state
         layer = s.ids < -self.n_res
-        s.v[layer, 0] = u_face
-        s.v[layer, 1:] = 0.0
+        v = s.v
+        v[layer, 0] = u_face
+        v[layer, 1:] = 0.0
+        s.v = v  # a copy (LAMMPS on several ranks) takes effect when assigned back
         xl, xr = self.sim.wall_positions()
         self.sim.place_walls(self.x_face, u_face, xr, s.walls0[3])
         self.u_face = float(u_face)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from ..io.atomic import write_netcdf
+from ..io.atomic import mpi_size, write_netcdf
 from ..io.dataset import point_dataset, scalar_vars
 from ..states import Pole
 from ..window.piston import History
@@ -29,7 +29,9 @@ def cpu_s() -> float:
 
 class Clock:
     """Wall and CPU time of this job since it started, plus ``prior`` (earlier jobs' cost:
-    wall_s, cpu_s [s], atom_steps)."""
+    wall_s, cpu_s [s], atom_steps). A job on several MPI ranks counts this rank's CPU time
+    once per rank (the ranks hold equal domains and run the same Python) and records
+    ``ranks``."""
 
     def __init__(self, *prior: dict):
         self.t0, self.c0 = time.perf_counter(), cpu_s()
@@ -44,10 +46,12 @@ class Clock:
 
     def cost(self, atom_steps: float = 0.0) -> dict[str, float]:
         """The cost so far with this job's ``atom_steps`` (particles x steps)."""
+        ranks = mpi_size()
         return {
             "wall_s": self.prior["wall_s"] + time.perf_counter() - self.t0,
-            "cpu_s": self.prior["cpu_s"] + cpu_s() - self.c0,
+            "cpu_s": self.prior["cpu_s"] + ranks * (cpu_s() - self.c0),
             "atom_steps": self.prior["atom_steps"] + float(atom_steps),
+            "ranks": float(ranks),
         }
 
 
