@@ -105,3 +105,7 @@ class LammpsKit:
 
     def load(self, ds: xr.Dataset, source: str | os.PathLike | None) -> LammpsSimulation:
         return LammpsSimulation.from_dataset(ds, source)
+
+    def skip_force_rows(self, sim: LammpsSimulation, n: int) -> None:
+        """Nothing: LAMMPS computes the force on its frozen atoms (``fix nve/noforce`` ignores
+        it); its neighbour lists are its own."""

@@ -136,17 +136,35 @@ def rebuild(
     half: np.ndarray,
     nhalf: np.ndarray,
     sort: bool,
+    rowless: int,
 ) -> int:
-    """Sort atoms by cell (if ``sort``), build the list, remember x_ref; return the row need."""
+    """Sort atoms by cell (if ``sort``), build the list, remember x_ref; return the row need.
+    ``rowless``: frozen atoms with ids −1 … −rowless keep no row (``drop_rows``)."""
     if sort:
         start = sort_by_cell(x, v, f, ids, L, nc)
     else:
         start = counting_sort(cell_of(x, L, nc), nc[0] * nc[1] * nc[2])[1]
     need = build_full_list(x, L, periodic, nc, start, rlist2, nbr, nnb)
-    if need <= nbr.shape[1] and use_half:
-        half_from_full(nbr, nnb, half, nhalf)
+    if need <= nbr.shape[1]:
+        if use_half:
+            half_from_full(nbr, nnb, half, nhalf)
+        else:
+            drop_rows(ids, nnb, rowless)
     x_ref[:] = x
     return need
+
+
+@njit
+def drop_rows(ids: np.ndarray, nnb: np.ndarray, rowless: int) -> None:
+    """Empty the full-list rows of the frozen atoms with ids −1 … −``rowless`` (the window's
+    inflow copy): nothing reads the force on them (frozen atoms are not kicked), while every
+    mobile row still lists them, so the mobile atoms' forces are unchanged bit for bit. Not
+    for the half list, whose pair (i, j) lives in one row only."""
+    if rowless <= 0:
+        return
+    for i in range(ids.shape[0]):
+        if -rowless <= ids[i] < 0:
+            nnb[i] = 0
 
 
 @njit
@@ -209,6 +227,7 @@ def run_steps(
     chi: np.ndarray,
     counters: np.ndarray,
     ref: np.ndarray,
+    rowless: int,
 ) -> tuple[int, int]:
     """Advance up to ``nsteps`` velocity-Verlet steps; return (steps completed, status).
 
@@ -222,7 +241,7 @@ def run_steps(
     epoch (``k0`` steps done so far): the same floats however the run is split. ``thermo`` = [T, τ, N_f]
     (T ≤ 0: no thermostat) with ``r1``/``chi`` the per-step random numbers. ``counters``
     [0] counts list builds. On status GROW the step is half done: the caller grows the list,
-    rebuilds, and calls ``finish_step``.
+    rebuilds, and calls ``finish_step``. ``rowless``: as ``rebuild``'s.
     """
     walls = np.empty(4)
     for s in range(nsteps):
@@ -244,8 +263,9 @@ def run_steps(
             return s, LOST
         if max_d2 > half_skin2:
             need = rebuild(
-                x, v, f, ids, x_ref, L, periodic, nc, rlist2, nbr, nnb, use_half, half, nhalf, True
-            )
+                x, v, f, ids, x_ref, L, periodic, nc, rlist2, nbr, nnb, use_half, half, nhalf, True,
+                rowless,
+            )  # fmt: skip
             counters[0] += 1
             ref[1] = 0.0
             if need > nbr.shape[1]:

@@ -61,6 +61,7 @@ class MDSimulation:
         # the half list doubles the list memory, so it is off unless asked for.
         self.use_half = bool(use_half)
         self.list_builds = 0
+        self.rowless = 0  # frozen atoms with ids -1 ... -rowless have no force row
         for d in range(3):
             if state.periodic[d] and state.L[d] < 2.0 * lj.rlist:
                 raise ValueError(
@@ -94,6 +95,7 @@ class MDSimulation:
                 need = ig.rebuild(
                     s.x, s.v, s.f, s.ids, s.x_ref, s.L, s.periodic, self.nc,
                     self.lj.rlist**2, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, True,
+                    self.rowless,
                 )  # fmt: skip
                 sort = False
             else:
@@ -101,8 +103,11 @@ class MDSimulation:
                 need = build_full_list(
                     s.x_ref, s.L, s.periodic, self.nc, start, self.lj.rlist**2, self.nbr, self.nnb
                 )
-                if need <= self.nbr.shape[1] and self.use_half:
-                    ig.half_from_full(self.nbr, self.nnb, self.half, self.nhalf)
+                if need <= self.nbr.shape[1]:
+                    if self.use_half:
+                        ig.half_from_full(self.nbr, self.nnb, self.half, self.nhalf)
+                    else:
+                        ig.drop_rows(s.ids, self.nnb, self.rowless)
             if need <= self.nbr.shape[1]:
                 self.list_builds += 1
                 return
@@ -175,7 +180,7 @@ class MDSimulation:
                 n_steps - done_total, s.x, s.v, s.f, s.ids, s.x_ref, s.L, s.periodic, s.walls0,
                 s.epoch_time, s.step - s.epoch_step, self.dt, self.lj.rc**2, self.lj.rlist**2, (0.5 * self.lj.skin) ** 2,
                 self.nc, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, s.impulse,
-                thermo, r1[done_total:], chi[done_total:], counters, ref,
+                thermo, r1[done_total:], chi[done_total:], counters, ref, self.rowless,
             )  # fmt: skip
             s.ref_shift = float(ref[1])
             s.step += done
@@ -231,6 +236,18 @@ class MDSimulation:
         [σ/τ]."""
         t = self.state.time
         self.state.walls0[:] = [x_left - v_left * t, v_left, x_right - v_right * t, v_right]
+
+    def skip_force_rows(self, n: int) -> None:
+        """From now on the frozen atoms with ids −1 … −``n`` (the window's inflow copy) have
+        no force row (``integrate.drop_rows``; full list only) and zero force: the force on
+        a frozen atom is never used, and every mobile atom's row still lists them, so the
+        mobile atoms move bit for bit as before at a fraction of the cost."""
+        self.rowless = int(n)
+        if self.use_half or self.rowless <= 0:
+            return
+        s = self.state
+        ig.drop_rows(s.ids, self.nnb, self.rowless)
+        s.f[(s.ids < 0) & (s.ids >= -self.rowless)] = 0.0
 
     def replace_atoms(self, x: np.ndarray, v: np.ndarray, ids: np.ndarray) -> None:
         """Replace the atom set (the window's inflow and outflow add and remove atoms).
@@ -399,6 +416,7 @@ class MDSimulation:
         sim.seed = int(ds.attrs["seed"])
         sim.use_half = False
         sim.list_builds = 0
+        sim.rowless = 0  # a window sets its own (``MDWindow``)
         sim.nc = grid_shape(state.L, lj.rlist)
         density = state.n / float(np.prod(state.L))
         sim._alloc_lists(int(4.0 / 3.0 * math.pi * lj.rlist**3 * density * 1.5) + 16)

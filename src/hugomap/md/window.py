@@ -126,6 +126,10 @@ class ParticleKit(Protocol):
     def load(self, ds: xr.Dataset, source: str | os.PathLike | None):
         """The simulation of a verified window checkpoint."""
 
+    def skip_force_rows(self, sim, n: int) -> None:
+        """Let ``sim`` skip the force on the frozen atoms with ids −1 … −n (the inflow copy),
+        where it can without changing the mobile atoms' motion."""
+
 
 class MDKit:
     """What the window needs to know of the numba MD backend (``ParticleKit``): reduced LJ
@@ -187,6 +191,10 @@ class MDKit:
 
     def load(self, ds: xr.Dataset, source: str | os.PathLike | None) -> MDSimulation:
         return MDSimulation.from_dataset(ds, source)
+
+    def skip_force_rows(self, sim: MDSimulation, n: int) -> None:
+        """``MDSimulation.skip_force_rows``: the inflow copy leaves the force loop."""
+        sim.skip_force_rows(n)
 
 
 def _kit_of(sim) -> MDKit:
@@ -332,6 +340,7 @@ class MDWindow:
         self.next_id = int(next_id)
         self.area = float(sim.state.L[1] * sim.state.L[2])
         self.n_res = int(self.res_x.shape[0])
+        self.kit.skip_force_rows(sim, self.n_res)
         # the outflow: rigid (the layer moves at u_out) or absorbing (module docstring)
         self.outflow = "rigid"
         self.z_out = self.tau_fast = self.tau_slow = 0.0
