@@ -29,7 +29,7 @@ pytestmark = pytest.mark.lammps
 
 MPIEXEC = Path(sys.executable).parent / "mpiexec"
 
-SCRIPT = r'''
+SCRIPT = r"""
 import sys
 import numpy as np
 from hugomap.io.atomic import mpi_rank
@@ -70,7 +70,7 @@ out["ranks"] = np.array([sim.ranks])
 sim.close()
 if mpi_rank() == 0:
     np.savez(sys.argv[1], **out)
-'''
+"""
 
 
 def _run(tmp: Path, ranks: int) -> dict[str, np.ndarray]:

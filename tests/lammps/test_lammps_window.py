@@ -69,6 +69,32 @@ def test_frozen_atoms_move_rigidly_and_are_not_observed() -> None:
     assert sim.mean_velocity() == pytest.approx(float(v1[~frozen, 0].mean()), abs=1e-12)
 
 
+def test_frozen_pairs_left_out_change_no_mobile_atom(monkeypatch) -> None:
+    """A pairwise model leaves the pairs between two frozen atoms out of LAMMPS's lists
+    (``neigh_modify exclude type 2 2``): they act on frozen atoms only, so the mobile atoms'
+    forces, and their positions after 100 steps, are bit for bit those of the run that
+    computes them (same lists otherwise, same order), while the frozen atoms' forces differ."""
+    import hugomap.lammps.simulation as lsim
+
+    runs = []
+    for styles in ((), lsim.PAIRWISE_STYLES):
+        monkeypatch.setattr(lsim, "PAIRWISE_STYLES", styles)
+        sim = _sim(frozen=96)
+        sim.per_atom_energy_virial()
+        ids = sim.state.ids
+        o = np.argsort(ids)
+        f = sim.state.f[o].copy()
+        sim.advance(100)
+        x, _, _ = sim.arrays()
+        runs.append((ids[o], f, x))
+        sim.close()
+    (ids, fa, xa), (_, fb, xb) = runs
+    m = ids >= 0
+    np.testing.assert_array_equal(fa[m], fb[m])
+    np.testing.assert_array_equal(xa[m], xb[m])
+    assert np.abs(fa[~m] - fb[~m]).max() > 1.0  # the frozen-frozen pairs were left out
+
+
 def test_replace_atoms_round_trip() -> None:
     sim = _sim()
     sim.advance(20)

@@ -92,6 +92,9 @@ __all__ = ["LAMMPS_CHECKPOINT", "LammpsSimulation", "lammps_class", "native"]
 #: mvv2e)) = 123 ps⁻¹, ω Δt = 0.12 at 1 fs; an atom at 10 Å/ps relative to the wall (five
 #: times the 300 K thermal speed) goes 0.08 Å past it.
 WALL_K = {"lj": 1000.0, "metal": 50.0}
+#: Pair styles whose force on an atom is a sum over its pairs alone (``neigh_modify exclude``
+#: of the frozen-frozen pairs leaves the mobile atoms' forces as they were).
+PAIRWISE_STYLES = ("lj/cut",)
 WALL_PAD = {"lj": 2.0, "metal": 2.0}
 #: Native units of a checkpoint's lengths and velocities (UDUNITS names; lj: reduced).
 NATIVE_NAMES = {"lj": ("sigma", "sigma tau^-1"), "metal": ("angstrom", "angstrom ps-1")}
@@ -215,6 +218,11 @@ class LammpsSimulation:
         ])  # fmt: skip
         self._create(x, v, ids)
         self._cmds(model_commands(self.model))
+        if pair_style_name(self.model) in PAIRWISE_STYLES:
+            # no pair between two frozen atoms: it acts on frozen atoms only, whose forces
+            # nothing reads (a pairwise model: every mobile atom's force is unchanged; with
+            # EAM a frozen atom's density enters its mobile neighbours' forces, so not there)
+            self._cmds(["neigh_modify exclude type 2 2"])
         self._cmds([
             "compute hm_pe all pe/atom pair",
             "compute hm_vir all stress/atom NULL pair",
