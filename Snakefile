@@ -78,6 +78,7 @@ except ConfigError as exc:
 include: "workflow/rules/common.smk"
 include: "workflow/rules/piston.smk"
 include: "workflow/rules/window.smk"
+include: "workflow/rules/shockframe.smk"
 include: "workflow/rules/hugoniot.smk"
 include: "workflow/rules/campaign.smk"
 

@@ -13,6 +13,7 @@ layout and its cost model; what it hands back is neutral (``hugomap.states``): a
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -21,6 +22,20 @@ import xarray as xr
 from .io.dataset import UnitTable
 from .states import ControlParams, PistonFrame, Pole, Profile, Resources, WindowStart
 from .window.protocol import ShockSolver, WindowSolver
+
+
+@dataclass
+class ShockFrameResult:
+    """One shock-frame point (``Backend.shock_frame_point``) in the backend's units:
+    ``values`` named as ``analysis.shock.measure_point`` names a point's (D, u_p_measured,
+    ρ, V, P, E, T, the jump residuals, each with ``_err``), its ``status`` and
+    ``diagnostic``, and ``attrs`` (the fix, its parameters, the iterations) for the point
+    file."""
+
+    values: dict[str, float]
+    status: str
+    diagnostic: str
+    attrs: dict[str, Any] = field(default_factory=dict)
 
 
 class Backend(Protocol):
@@ -109,3 +124,12 @@ class Backend(Protocol):
 
     def sound_speed(self, scene: dict) -> float | None:
         """The material model's sound speed c0 where it has one (None: fit the reference)."""
+
+    def shock_frame_point(
+        self, scene: dict, scheme: str, u_p: float, pole: Pole, info: dict
+    ) -> ShockFrameResult:
+        """Optional (solver lammps only; the ``shockframe`` stage refuses a backend without
+        it): a Hugoniot point at ``u_p`` [the frame's velocity units] from a shock-frame
+        method (``scheme``: msst, nphug) on a homogeneous periodic box of the material at
+        the sample's ``pole``, held on that pole's Hugoniot by the solver
+        (``lammps.shockframe``)."""

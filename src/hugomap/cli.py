@@ -20,7 +20,7 @@ import textwrap
 USER_COMMANDS = ("check-config", "status", "export-lammps", "figures", "history", "replicas")
 STAGE_COMMANDS = (
     "prepare", "load", "piston", "reference", "window", "amw", "mw", "dichotomy-state",
-    "dichotomy-trial", "dichotomy-point", "aggregate", "campaign",
+    "dichotomy-trial", "dichotomy-point", "shockframe", "aggregate", "campaign",
 )  # fmt: skip
 
 
@@ -87,6 +87,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--u-p", type=float, required=True)
     p.add_argument("--state", required=True)
     p.add_argument("trials", nargs="*")
+    p = stage("shockframe", "msst or nphug point from the sample's pole (solver lammps)")
+    p.add_argument("--sample", required=True)
+    p.add_argument("--u-p", type=float, required=True)
+    p.add_argument("--scheme", required=True, choices=("msst", "nphug"))
     p = add("aggregate", help="join a scene's points into one dataset")
     p.add_argument("--config-json", required=True)
     p.add_argument("--scene-name", required=True)
@@ -148,7 +152,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.cmd is None:
         ap.print_help()
         return 0
-    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(message)s")
+    from .io.atomic import mpi_rank
+
+    # the ranks of an MPI stage log the same lines: rank 0's progress, every rank's warnings
+    level = logging.INFO if mpi_rank() == 0 else logging.WARNING
+    logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(message)s")
 
     if args.cmd == "status":  # reads files only: no solver imports
         from .config import ConfigError
@@ -196,6 +204,8 @@ def main(argv: list[str] | None = None) -> int:
     elif args.cmd == "dichotomy-point":
         stages.dichotomy_point(args.window, _scene(args), args.u_p, args.state, args.trials,
                                args.out)  # fmt: skip
+    elif args.cmd == "shockframe":
+        stages.shock_frame_point(args.sample, _scene(args), args.scheme, args.u_p, args.out)
     elif args.cmd == "aggregate":
         stages.aggregate(
             args.points, args.reference, json.loads(args.config_json), args.scene_name, args.out

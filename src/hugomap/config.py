@@ -210,6 +210,58 @@ def _scene_checks(cfg: dict) -> list[str]:
     return problems
 
 
+def _solver_schemes(schema: dict) -> dict[str, list[str]]:
+    """The schemes each registered solver runs: the ``schemes`` enum of its scene schema
+    (``$defs`` ``<solver>_scene``, joined by ``load_schema``)."""
+    out = {}
+    for name in registry.REGISTRY:
+        sub = schema.get("$defs", {}).get(f"{name}_scene", {})
+        enum = sub.get("properties", {}).get("schemes", {}).get("items", {}).get("enum")
+        if isinstance(enum, list):
+            out[name] = [str(e) for e in enum]
+    return out
+
+
+def _scheme_problems(cfg: dict, schema: dict) -> tuple[list[str], set[str]]:
+    """Schemes a scene lists (its own ``schemes`` or the top-level ones it inherits) that
+    its solver does not run but another does (the shock-frame schemes msst, nphug: solver
+    lammps only), each message naming ``scenes.<name>.schemes`` (after the top-level
+    ``schemes`` where the scene inherits them) and the solver the scheme needs; and the scenes so refused (their schema enum errors say less and are dropped)."""
+    runs = _solver_schemes(schema)
+    scenes = cfg.get("scenes")
+    top = cfg.get("schemes", ["piston"])
+    problems, refused = [], set()
+    if not isinstance(scenes, dict):
+        return problems, refused
+    for name, sc in scenes.items():
+        if not isinstance(sc, dict):
+            continue
+        try:
+            solver = registry.solver_of(sc)
+        except (KeyError, TypeError):
+            continue
+        own = "schemes" in sc
+        schemes = sc["schemes"] if own else top
+        if solver not in runs or not isinstance(schemes, list):
+            continue
+        for scheme in schemes:
+            if not isinstance(scheme, str) or scheme in runs[solver]:
+                continue
+            need = [n for n, allowed in runs.items() if scheme in allowed]
+            if not need:
+                continue
+            why = (f"scheme {scheme!r} needs solver: {' or '.join(need)} (scene {name!r} has "
+                   f"solver {solver!r})")  # fmt: skip
+            if own:
+                problems.append(f"scenes.{name}.schemes = {_show(schemes)}: {why}; allowed "
+                                f"values {runs[solver]}")  # fmt: skip
+            else:  # inherited: the top-level key is the one set; the scene's would override it
+                problems.append(f"schemes = {_show(schemes)}, inherited as scenes.{name}.schemes:"
+                                f" {why}; give scenes.{name}.schemes from {runs[solver]}")  # fmt: skip
+            refused.add(str(name))
+    return problems, refused
+
+
 def _tree_copy(node: Any, ancestors: tuple[int, ...] = ()) -> Any:
     """A copy of ``node`` in which no dict or list appears twice (YAML aliases become
     separate copies); a value that contains itself keeps its cycle (refused later)."""
@@ -266,7 +318,18 @@ def validate_config(cfg: Any, schema: dict | None = None) -> dict:
             raise ConfigError(
                 "invalid config:\n  (top level): a value contains itself (recursive YAML anchor)"
             ) from None
-        problems = [_message(e) for e in errors]
+        problems, refused = _scheme_problems(cfg, schema) if isinstance(cfg, dict) else ([], set())
+        problems += [
+            _message(e)
+            for e in errors
+            if not (
+                len(e.absolute_path) >= 3
+                and list(e.absolute_path)[0] == "scenes"
+                and str(list(e.absolute_path)[1]) in refused
+                and list(e.absolute_path)[2] == "schemes"
+                and e.validator == "enum"
+            )
+        ]
     if not problems:
         problems = _scene_checks(cfg)
     if problems:

@@ -9,6 +9,7 @@ Snakemake state, so it works while a sweep runs, after it was killed, or on a co
     results/<scene>/up<u>/piston.nc.part.nc        periodic checkpoint of a running piston point
     results/<scene>/up<u>/window.nc                window checkpoint (attr ``status``)
     results/<scene>/up<u>/{amw,mw,dichotomy}.nc    window points (as piston.nc)
+    results/<scene>/up<u>/{msst,nphug}.nc          shock-frame points, from sample.nc alone
     results/<scene>/up<u>/dichotomy/state<k>.json  the dichotomy's loop state, iteration k
     results/<scene>/reference.nc                   reference Hugoniot
     results/hugoniot/<scene>.nc                    the scene's aggregate
@@ -23,7 +24,8 @@ time and the age of the checkpoint are shown: an old checkpoint means the job wa
 will resume from it); an AMW/MW run has a job log newer than the window checkpoint; a
 dichotomy has loop states (its latest iteration and bracket are shown, from the JSON object
 with ``k``, ``bracket``, ``pending``, ``done``, ``status``; a loop that ended without a root
-is failed with its ``reason``). Points and schemes found on disk but not in the config are
+is failed with its ``reason``); a shock-frame point (msst, nphug) has a job log newer than the
+sample. Points and schemes found on disk but not in the config are
 listed too, marked as such.
 """
 
@@ -45,8 +47,9 @@ DONE_STATES = ("ok", "not_converged")
 STATES = ("ok", "not_converged", "failed", "running", "pending")
 RESERVED = ("hugoniot", "figures", "logs", "campaign", "references")
 PART_SUFFIX = ".part.nc"
-SCHEMES = ("piston", "amw", "mw", "dichotomy")  # every scheme the workflow knows
+SCHEMES = ("piston", "amw", "mw", "dichotomy", "msst", "nphug")  # every scheme the workflow knows
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")  # those that start from the window checkpoint
+SHOCK_FRAME_SCHEMES = ("msst", "nphug")  # those that start from the sample (solver lammps)
 
 
 @dataclass
@@ -143,6 +146,8 @@ def point_status(
     p = PointStatus(u_p=float(u_p), tag=tag, state="pending", scheme=scheme)
     if scheme == "piston":
         return _piston(folder, logs, p, now)
+    if scheme in SHOCK_FRAME_SCHEMES:
+        return _shock_frame(results / scene / "sample.nc", folder, logs, p, now)
     if scheme == "dichotomy":
         p.dichotomy = dichotomy_progress(folder)
     if _final(folder / f"{scheme}.nc", p) or not _window_ok(folder, logs, p):
@@ -154,6 +159,22 @@ def point_status(
     if crash:
         p.state, p.diagnostic = "failed", crash
     elif log.exists() and log.stat().st_mtime >= (folder / "window.nc").stat().st_mtime:
+        p.state, p.log_age_s = "running", _seconds_since(log, now)
+    return p
+
+
+def _shock_frame(
+    sample: Path, folder: Path, logs: Path, p: PointStatus, now: float | None
+) -> PointStatus:
+    """A shock-frame point (msst, nphug): done, crashed, or running (a job log newer than the
+    sample it starts from); else pending."""
+    if _final(folder / f"{p.scheme}.nc", p):
+        return p
+    log = logs / f"{p.scheme}.log"
+    crash = _crash(log)
+    if crash:
+        p.state, p.diagnostic = "failed", crash
+    elif log.exists() and sample.exists() and log.stat().st_mtime >= sample.stat().st_mtime:
         p.state, p.log_age_s = "running", _seconds_since(log, now)
     return p
 

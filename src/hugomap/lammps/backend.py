@@ -38,6 +38,9 @@ the measured slabs' lengths in the frame's units (m). Its checkpoint is
 ``hugomap-lammps-window/1``. The absorbing outflow is refused at validation (the wall's
 impulse is not measured).
 
+The shock-frame schemes msst and nphug (LAMMPS ``fix msst``, ``fix nphug`` on a periodic box
+at the sample's pole, no loading, no window): ``shock_frame_point``, ``lammps.shockframe``.
+
 Not yet: trajectories (``extras`` writes the last frame only), a LAMMPS reference (an
 lj/cut scene's reference is the MD backend's equilibrium MD of the same potential).
 """
@@ -50,7 +53,7 @@ import logging
 import math
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import xarray as xr
@@ -61,6 +64,9 @@ from ..io.dataset import UnitTable, lj_units, si_units
 from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
 from .scene_config import pair_style_name
 from .units import METAL, UnitSystem, number_density_factor, si_pole, unit_system
+
+if TYPE_CHECKING:
+    from ..backend import ShockFrameResult
 
 log = logging.getLogger("hugomap")
 #: Kept clear of a wall when measuring the pole [σ | Å]: lj the MD backend's 4 σ; metal
@@ -456,6 +462,24 @@ class LammpsBackend:
         )  # fmt: skip
         write_extxyz(snapshot_paths(out)[0], text)
 
+    # -- shock-frame schemes (msst, nphug) -------------------------------------------------
+    def shock_frame_point(
+        self, scene: dict, scheme: str, u_p: float, pole: Pole, info: dict
+    ) -> ShockFrameResult:
+        """``lammps.shockframe.shock_frame_point``: a periodic box of the scene's model at the
+        sample's ``pole`` (a fluid's measured ρ0; a crystal's lattice ρ0) held on its
+        Hugoniot by ``fix nphug`` or ``fix msst``, iterated until u_p [σ/τ | m/s] is the
+        scene's; the start from ``sound_speed`` (lj: none, measured on the box). Values in
+        the frame's units (metal: SI)."""
+        from ..backend import ShockFrameResult
+        from .shockframe import shock_frame_point
+
+        lattice = scene["sample"]["rho0"] if scene["phase"] == "crystal" else None
+        values, status, diagnostic, attrs = shock_frame_point(
+            scene, scheme, u_p, pole, self.sound_speed(scene), lattice
+        )
+        return ShockFrameResult(values, status, diagnostic, attrs)
+
     def _snapshot_units(self, scene: dict) -> dict[str, Any]:
         """A snapshot's masses, species and unit labels (units lj: m = 1, ``Ar``)."""
         return {"masses": 1.0, "species": "Ar", "length_unit": "sigma", "time_unit": "tau",
@@ -466,20 +490,23 @@ class LammpsBackend:
         """Memory: LAMMPS's per-atom storage plus the profile history (samples x bins x 11
         float64, held and copied once); CPU: an upper bound of atom-steps at
         ``S_PER_ATOM_STEP`` (prepare: equilibration and pole; load/piston: up to
-        ``shock.max_time``; reference: as the MD backend's)."""
+        ``shock.max_time``; reference: as the MD backend's); ``ranks``: the scene's, the
+        memory that many times (every rank holds the gathered per-atom arrays)."""
         s, sh = scene["sample"], scene["shock"]
         if stage == "reference":
             from ..md.backend import MDBackend
 
             return MDBackend().cost(md_view(scene), stage)
         n = 4 * s["cells"][0] * s["cells"][1] * s["cells"][2]
+        ranks = int(scene["ranks"])
         if stage == "prepare":
             steps = (s["equilibrate_time"] + s["pole_time"]) / s["dt"]
-            return Resources(int(BASE_MB + n * BYTES_PER_ATOM / 2**20), n * steps * S_PER_ATOM_STEP)
+            mem = int(BASE_MB + n * BYTES_PER_ATOM / 2**20)
+            return Resources(ranks * mem, n * steps * S_PER_ATOM_STEP, ranks)
         length = s["cells"][0] * (4.0 / s["rho0"]) ** (1.0 / 3.0)
         hist = sh["max_time"] / sh["dt"] / sh["sample_every"] * (length / sh["bin_width"] + 1) * 88
         mem = int(BASE_MB + (n * BYTES_PER_ATOM + 2 * hist) / 2**20)
-        return Resources(mem, n * sh["max_time"] / sh["dt"] * S_PER_ATOM_STEP)
+        return Resources(ranks * mem, n * sh["max_time"] / sh["dt"] * S_PER_ATOM_STEP, ranks)
 
     # -- presentation ----------------------------------------------------------------------
     def figure_labels(self, scene: dict) -> dict:

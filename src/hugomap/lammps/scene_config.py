@@ -3,9 +3,11 @@ potential files (light: run at validation; no LAMMPS library is loaded, no xarra
 
 The piston and the moving-window schemes (amw, mw, dichotomy) in units lj or metal (the
 window's slab lengths reach the stages in the frame's units through ``ControlParams``); the
-window's absorbing outflow is refused here, naming the key. Defaults that depend on the
-unit system (``DEFAULTS``: time steps and times [τ | ps], lengths [σ | Å], the skin, lj's
-mass, the window's lengths and times and the dichotomy's velocities [σ/τ | m/s]) are
+window's absorbing outflow is refused here, naming the key; the shock-frame schemes msst,
+nphug (``SHOCK_FRAME_SCHEMES``, ``lammps.shockframe``) with their ``shock_frame`` block.
+Defaults that depend on the unit system (``DEFAULTS``: time steps and times [τ | ps],
+lengths [σ | Å], the skin, lj's mass, the window's lengths and times, the dichotomy's
+velocities [σ/τ | m/s], the shock-frame times and MSST's q and mu) are
 resolved here, as are ``sample.rho0`` from ``sample.lattice_constant`` and metal's bin
 width (the lattice constant: two (100) planes).
 """
@@ -30,6 +32,8 @@ PAIR_STYLES = {
 RUNNABLE_UNITS = ("lj", "metal")
 #: Shock methods that run in the moving window.
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
+#: Shock methods that run a LAMMPS shock-frame fix on a periodic box (``lammps.shockframe``).
+SHOCK_FRAME_SCHEMES = ("msst", "nphug")
 #: Defaults per unit system (lj: the values the schema had; metal: a copper-like crystal
 #: at 1 fs, whose fastest vibrations are ~0.13 ps, and Å-scale slabs of a few planes).
 DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
@@ -44,6 +48,12 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
                    "reservoir_equilibrate_time": 3.0, "reservoir_length": 40.0,
                    "settle_time": 10.0, "window_time": 2.0, "average_time": 10.0},
         "window.dichotomy": {"half_width": 0.4, "tolerance": 0.02},
+        # shock-frame schemes (lammps.shockframe), measured on the LJ liquid (rho0 0.8, T0 2,
+        # u_p = 2): nphug at Pdamp 1 tau settles within ~3 tau; MSST with q = 1, mu = 30
+        # compresses from the pole within ~7 tau; E - E0 fluctuates by 1.1 % over 6 tau
+        "shock_frame": {"equilibrate_time": 2.0, "average_time": 12.0},
+        "shock_frame.nphug": {"pdamp": 1.0, "tdamp": 0.5, "relax_time": 3.0},
+        "shock_frame.msst": {"q": 1.0, "mu": 30.0, "relax_time": 8.0},
     },
     "metal": {
         "model": {"skin": 1.0},
@@ -60,6 +70,11 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
                    "reservoir_equilibrate_time": 1.0, "reservoir_length": 0.0,
                    "settle_time": 2.0, "window_time": 2.0, "average_time": 3.0},
         "window.dichotomy": {"half_width": 200.0, "tolerance": 10.0},
+        # shock-frame schemes: times of a few sound transits of the ~30 A box; MSST's q and mu
+        # scaled from lj's by the atom mass, length and time of a metal (not tuned)
+        "shock_frame": {"equilibrate_time": 1.0, "average_time": 4.0},
+        "shock_frame.nphug": {"pdamp": 1.0, "tdamp": 0.1, "relax_time": 2.0},
+        "shock_frame.msst": {"q": 100.0, "mu": 3000.0, "relax_time": 4.0},
     },
 }  # fmt: skip
 #: Ranges that depend on the unit system: (key, lj range, metal range) (inclusive).

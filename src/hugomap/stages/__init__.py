@@ -9,6 +9,7 @@ Every stage is solver-agnostic: it asks the registry for the scene's backend
                                       └─ window_start ─┬─ control_point (AMW, MW)
                                                        └─ dichotomy_state ⇄ dichotomy_trial
                                                           ─▶ dichotomy_point
+    prepare_sample ─▶ shock_frame_point (msst, nphug: solver lammps)
     reference_stage; aggregate
 """
 
@@ -20,7 +21,7 @@ _STAGES = {
     "aggregate": "aggregation", "control_point": "control", "dichotomy_point": "dichotomy",
     "dichotomy_state": "dichotomy", "dichotomy_trial": "dichotomy", "load_to_target": "load",
     "piston_point": "piston", "prepare_sample": "sample", "reference_stage": "reference",
-    "window_start": "window",
+    "shock_frame_point": "shockframe", "window_start": "window",
 }  # fmt: skip
 __all__ = sorted(_STAGES)
 
