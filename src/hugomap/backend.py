@@ -36,6 +36,9 @@ class ShockFrameResult:
     status: str
     diagnostic: str
     attrs: dict[str, Any] = field(default_factory=dict)
+    #: the pole the point's jump is taken from, where it is not the sample's (a crystal's
+    #: box measures its own: ``lammps.shockframe``)
+    pole: dict[str, float] | None = None
 
 
 class Backend(Protocol):

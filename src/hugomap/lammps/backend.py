@@ -467,7 +467,7 @@ class LammpsBackend:
         self, scene: dict, scheme: str, u_p: float, pole: Pole, info: dict
     ) -> ShockFrameResult:
         """``lammps.shockframe.shock_frame_point``: a periodic box of the scene's model at the
-        sample's ``pole`` (a fluid's measured ρ0; a crystal's lattice ρ0) held on its
+        sample's ``pole`` (a crystal: the box's own pole at the lattice's ρ0) held on its
         Hugoniot by ``fix nphug`` or ``fix msst``, iterated until u_p [σ/τ | m/s] is the
         scene's; the start from ``sound_speed`` (lj: none, measured on the box). Values in
         the frame's units (metal: SI)."""
@@ -475,10 +475,11 @@ class LammpsBackend:
         from .shockframe import shock_frame_point
 
         lattice = scene["sample"]["rho0"] if scene["phase"] == "crystal" else None
-        values, status, diagnostic, attrs = shock_frame_point(
+        values, status, diagnostic, attrs, used = shock_frame_point(
             scene, scheme, u_p, pole, self.sound_speed(scene), lattice
         )
-        return ShockFrameResult(values, status, diagnostic, attrs)
+        return ShockFrameResult(values, status, diagnostic, attrs,
+                                None if lattice is None else used)  # fmt: skip
 
     def _snapshot_units(self, scene: dict) -> dict[str, Any]:
         """A snapshot's masses, species and unit labels (units lj: m = 1, ``Ar``)."""

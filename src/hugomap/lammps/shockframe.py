@@ -1,7 +1,9 @@
 """Shock-frame Hugoniot schemes on LAMMPS (package SHOCK): ``nphug`` and ``msst``.
 
 One homogeneous, fully periodic box of the scene's material stands for the shocked slab; a
-LAMMPS fix holds it on the Hugoniot of the sample's measured pole (ρ0, P0, E0), so a point
+LAMMPS fix holds it on the Hugoniot of the sample's measured pole (ρ0, P0, E0; a crystal's
+box keeps its lattice and measures its own pole in NVE at T0, as the window's inflow of a
+crystal: the sample's P_xx between walls need not be the periodic lattice's), so a point
 costs a few thousand atoms and a few tens of τ instead of a whole piston run. Neither fix
 is driven by u_p: both give the state of a given shock strength, so the scheme iterates on
 that strength until the measured u_p is the scene's.
@@ -313,6 +315,22 @@ def measure(series: dict[str, np.ndarray], n: int, conv: Native, pole: Pole,
     return out
 
 
+def box_pole(series: dict[str, np.ndarray], n: int, conv: Native) -> Pole:
+    """The pole of the box itself in the backend's units (block averages of ``series``, an
+    NVE run at T0): ρ0, P0 = P_xx, Pyy0, E0 (per unit mass | per atom), T0."""
+    st = {
+        "rho0": n / series["vol"] * conv.density,
+        "P0": series["pxx"] * conv.pressure,
+        "Pyy0": series["pyy"] * conv.pressure,
+        "E0": (series["pe"] + series["ke"]) / n * conv.energy,
+        "T0": series["temp"],
+    }
+    out = {}
+    for k, y in st.items():
+        out[k], out[k + "_err"] = block_average(y, N_BLOCKS)
+    return Pole.from_dict(out)
+
+
 def residuals(state: dict[str, float], pole: Pole) -> tuple[dict[str, float], dict[str, float]]:
     """The three jump residuals of ``state`` (D, u_p, ρ, P, E) against the pole
     (``analysis.shock.jump_residuals``) and their errors (``jump_residual_errors``)."""
@@ -328,7 +346,16 @@ def residuals(state: dict[str, float], pole: Pole) -> tuple[dict[str, float], di
 def next_target(scheme: str, its: list[Iteration], u_t: float, pole: Pole, conv: Native) -> float:
     """The next P (nphug, native pressure) or Us (msst, native velocity) for the target u_t:
     a secant through the last two iterations where its slope is positive, else the Rayleigh
-    line from the last one with D ≈ D_k + s (u_t − u_k), s = ``SLOPE``."""
+    line from the last one with D ≈ D_k + s (u_t − u_k), s = ``SLOPE``; within [½, 2] × the
+    last target."""
+    last = its[-1]
+    return float(np.clip(_next(scheme, its, u_t, pole, conv), 0.5 * last.target,
+                         2.0 * last.target))  # fmt: skip
+
+
+def _next(scheme: str, its: list[Iteration], u_t: float, pole: Pole, conv: Native) -> float:
+    """``next_target`` before its clamp to [½, 2] × the last target (a fix that did not
+    respond, u_p ≈ 0, gives a secant slope that would throw the next target far off)."""
     last = its[-1]
     if len(its) >= 2:
         prev = its[-2]
@@ -382,12 +409,15 @@ def box_sound_speed(box: FrameBox, params: Params, conv: Native, rho0: float) ->
 
 def shock_frame_point(
     scene: dict, scheme: str, u_p: float, pole: Pole, c0: float | None, rho_lattice: float | None
-) -> tuple[dict[str, float], str, str, dict]:
+) -> tuple[dict[str, float], str, str, dict, dict[str, float]]:
     """One Hugoniot point of ``scheme`` (nphug or msst) at the particle velocity ``u_p`` of
     the frame [σ/τ | m/s] from the sample's ``pole`` (the backend's units), following the
     module docstring; ``c0``: the model's sound speed [velocity] or None (measured on the
     box); ``rho_lattice``: a crystal's FCC number density [σ⁻³ | Å⁻³] (None: a fluid, its
-    box made at the pole's ρ0). Returns (values, status, diagnostic, attrs): values as
+    box made at the pole's ρ0; a crystal's box measures its own pole in NVE at T0 and
+    holds the Hugoniot from it, as the window's inflow of a crystal does: the sample's P0
+    between walls need not be the periodic lattice's). Returns (values, status, diagnostic,
+    attrs, the pole used as a dict): values as
     ``analysis.shock.measure_point`` names them (D, u_p_measured, ρ, V, P, Pyy, Pzz, T, E,
     E_minus_E0, P_rh, shear_stress, the residuals, each with ``_err``, n_samples,
     atom_steps), attrs the fix, its parameters and the iterations."""
@@ -413,6 +443,10 @@ def shock_frame_point(
         c_start = c0 if c0 is not None else box_sound_speed(box, prm, conv, pole.rho0)
         if not (c_start and math.isfinite(c_start) and c_start > 0):
             c_start = 2.0 * u_p  # no measurable modulus: a strong-shock guess
+        if rho_lattice is not None:  # a crystal: the box's own pole (module docstring)
+            n_pole = max(int(round(prm.average_time / prm.dt / prm.sample_every)), 2 * N_BLOCKS)
+            pole = box_pole(box.sample(n_pole, prm.sample_every), box.n, conv)
+            log.info("shock-frame pole (the crystal box's): %s", pole.as_dict())
         # the pole in LAMMPS's units for the fixes: total volume and energy of n atoms
         V0_tot = n / (pole.rho0 / conv.density)
         E0_tot = n * pole.E0 / conv.energy
@@ -538,5 +572,7 @@ def shock_frame_point(
         "shock_frame_atoms": int(n),
         "lammps_units": str(model["units"]),
         "shock_frame_wall_s": time.perf_counter() - t_wall,
+        "shock_frame_pole": ("the sample's" if rho_lattice is None else
+                             "the periodic box's at the lattice's rho0 and T0 (a crystal)"),
     }  # fmt: skip
-    return values, status, diagnostic, attrs
+    return values, status, diagnostic, attrs, pole.as_dict()

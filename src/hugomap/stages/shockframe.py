@@ -26,7 +26,9 @@ def shock_frame_point(
     sample: str | os.PathLike, scene: dict, scheme: str, u_p: float, out: str | os.PathLike
 ) -> Path:
     """Run ``scheme`` (msst or nphug) at ``u_p`` [the backend's velocity units] from the pole
-    of ``sample`` (the ``prepare`` stage's file) and write the point file ``out``; a sample
+    of ``sample`` (the ``prepare`` stage's file; the point's pole variables are the pole the
+    backend took the jump from: a crystal's box measures its own) and write the point file
+    ``out``; a sample
     that failed, a backend without shock-frame schemes or a solver that stopped gives a
     point file with that status and a diagnostic."""
     if scheme not in SCHEMES:
@@ -55,5 +57,5 @@ def shock_frame_point(
              "%s in %d iterations", scheme, values["D"], values["D_err"], u_p,
              values["u_p_measured"], values["u_p_measured_err"], values["P"], values["P_err"],
              r.status, r.attrs.get("shock_frame_iterations", 0))  # fmt: skip
-    return write_point(out, b, scene, scheme, values, pole.as_dict(), None, r.status,
-                       r.diagnostic, attrs=r.attrs)  # fmt: skip
+    return write_point(out, b, scene, scheme, values, r.pole or pole.as_dict(), None,
+                       r.status, r.diagnostic, attrs=r.attrs)  # fmt: skip
