@@ -499,7 +499,10 @@ def shock_frame_point(
                 target = next_target(scheme, its, u_p, pole, conv) if math.isfinite(
                     st["D"]) else target * 1.2  # fmt: skip
                 continue
-            if abs(miss) <= max(2.0 * st["u_p_err"], prm.up_tolerance * abs(u_p)):
+            # within 2 errors (an error no larger than residual_tol of u_p: a fix still
+            # swinging is not hit by luck) or within up_tolerance
+            if abs(miss) <= max(min(2.0 * st["u_p_err"], tol * abs(u_p)),
+                                prm.up_tolerance * abs(u_p)):  # fmt: skip
                 break
             target = next_target(scheme, its, u_p, pole, conv)
         steps = box.steps
