@@ -420,7 +420,7 @@ class LammpsSimulation:
         (the piston brings its left wall back to rest, ``set_walls``, before it runs)."""
         v = self._v()
         v[:, 0] += du  # (no new set-up: pair forces do not read v)
-        self._set_v(v)
+        self._put("v", v)
         self.set_walls(self.walls0[1] + du, self.walls0[3] + du)
 
     def scale_x(self, factor: float) -> None:
@@ -436,7 +436,7 @@ class LammpsSimulation:
             self._cmds([f"change_box all x final {_f(-self.pad)} {_f(hi)} units box"])
         x = self._x()
         x[:, 0] *= factor
-        self._set_x(x)
+        self._put("x", x)
         self._setup_needed = True  # moved atoms: ghosts and lists must be rebuilt
         if hi > float(self.L[0]) + self.pad:
             hi = float(self.L[0]) + self.pad
@@ -448,7 +448,7 @@ class LammpsSimulation:
     # -- per-atom arrays ----------------------------------------------------------------------
     # One rank: views into LAMMPS memory in its local order, valid until the next run. Several
     # ranks (module docstring): copies of every atom, gathered in LAMMPS id order, the same on
-    # every rank; a change goes back through ``_set_x``/``_set_v`` (a scatter).
+    # every rank; a change goes back through ``_put`` (a scatter).
     def _nlocal(self) -> int:
         return int(self.lmp.extract_global("nlocal"))
 
@@ -457,11 +457,6 @@ class LammpsSimulation:
         collective call: (n,) for ``count`` 1, else (n, count)."""
         data = np.ctypeslib.as_array(self.lmp.gather(name, 1, count)).copy()
         return data if count == 1 else data.reshape(-1, count)
-
-    def _scatter(self, name: str, values: np.ndarray) -> None:
-        """Set every atom's ``name`` from (n, 3) ``values`` in id order (collective)."""
-        flat = np.ascontiguousarray(values, dtype=float).ravel()
-        self.lmp.scatter_atoms(name, 1, 3, flat.ctypes.data_as(ctypes.c_void_p))
 
     def _per_atom(self, name: str) -> np.ndarray:
         if self.ranks == 1:
@@ -474,23 +469,17 @@ class LammpsSimulation:
     def _v(self) -> np.ndarray:
         return self._per_atom("v")
 
-    def _set_x(self, x: np.ndarray) -> None:
-        """Positions back into LAMMPS (one rank: in place unless ``x`` is the view itself)."""
+    def _put(self, name: str, values: np.ndarray) -> None:
+        """Per-atom ``name`` (x or v, (n, 3) in the order of ``_per_atom``) back into LAMMPS:
+        one rank in place (nothing to do when ``values`` is the view itself), several by a
+        scatter in id order (collective)."""
         if self.ranks == 1:
-            view = self._x()
-            if x is not view:
-                view[:] = x
-        else:
-            self._scatter("x", x)
-
-    def _set_v(self, v: np.ndarray) -> None:
-        """Velocities back into LAMMPS (one rank: in place unless ``v`` is the view itself)."""
-        if self.ranks == 1:
-            view = self._v()
-            if v is not view:
-                view[:] = v
-        else:
-            self._scatter("v", v)
+            view = self._per_atom(name)
+            if values is not view:
+                view[:] = values
+            return
+        flat = np.ascontiguousarray(values, dtype=float).ravel()
+        self.lmp.scatter_atoms(name, 1, 3, flat.ctypes.data_as(ctypes.c_void_p))
 
     def _ids(self) -> np.ndarray:
         """The hugomap labels of the atoms in the order of ``_x``."""
@@ -664,7 +653,7 @@ class _StateView:
 
     @v.setter
     def v(self, value: np.ndarray) -> None:
-        self._sim._set_v(value)
+        self._sim._put("v", value)
 
     @property
     def f(self) -> np.ndarray:
