@@ -3,7 +3,7 @@
 ``si.WindowSIView``.
 
 ``LammpsKit`` is what ``MDWindow`` and ``md.window.make_reservoir`` need beyond the
-simulation's interface (``md.window.ParticleKit``): the domain and the reservoir are LAMMPS
+simulation's interface (``md.kit.ParticleKit``): the domain and the reservoir are LAMMPS
 instances of the scene's own model (``model``), the reservoir a fully periodic box
 (``LammpsSimulation(periodic_x=True)``) of the scene's FCC lattice at (ρ0, T0) under
 LAMMPS's CSVR thermostat, so the inflow of an EAM copper scene is EAM copper. Its checkpoint
@@ -32,7 +32,7 @@ SCALE = {"lj": 1.0, "metal": 2.0}
 
 
 class LammpsKit:
-    """``md.window.ParticleKit`` for LAMMPS: ``model`` is the scene's validated ``model``
+    """``md.kit.ParticleKit`` for LAMMPS: ``model`` is the scene's validated ``model``
     block (None: only for loading a checkpoint, which carries its model)."""
 
     window_kind: CheckpointKind = LAMMPS_WINDOW_CHECKPOINT

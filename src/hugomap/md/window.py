@@ -53,7 +53,7 @@ walls0, time, step, ref_velocity; ``advance``, ``place_walls``, ``replace_atoms`
 ``galilean_shift``, ``profile_sums``, ``mean_velocity``, ``wall_positions``, ``dt``,
 ``to_dataset``. What differs between backends, building a simulation (the domain, the
 reservoir), loading one, its cutoff, units and checkpoint kind, comes from a ``ParticleKit``:
-``MDKit`` here (numba MD, reduced LJ units), ``lammps.window.LammpsKit`` for LAMMPS. All
+``md.kit.MDKit`` (numba MD, reduced LJ units), ``lammps.window.LammpsKit`` for LAMMPS. All
 lengths, times and velocities are the simulation's own units; the fixed lengths of the
 set-up (``MARGIN``, the seam's overlap distance, the walls' layer) are multiples of the
 kit's ``scale`` (MD: 1 σ).
@@ -66,7 +66,6 @@ import math
 import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Protocol
 
 import numpy as np
 import xarray as xr
@@ -74,132 +73,15 @@ import xarray as xr
 from ..failures import SolverUnstable, WindowError
 from ..io.atomic import write_netcdf
 from ..io.checkpoint import (
-    MD_WINDOW_CHECKPOINT,
-    CheckpointKind,
     read_checkpoint,
     seal_checkpoint,
     verify_checkpoint,
 )
+from .kit import MDKit, _kit_of
 from .potential import LJParams
-from .sample import fcc_state
 from .simulation import MDSimulation
-from .state import MDState
 
 MARGIN = 2.0  # σ (kit scales) of empty box beyond the frozen layers
-
-
-class ParticleKit(Protocol):
-    """What ``MDWindow`` and ``make_reservoir`` need to know of a particle backend beyond
-    the simulation's own interface (module docstring), in the simulation's units:
-    ``window_kind`` (its window checkpoint kind), ``units`` (the names of its length and
-    velocity units), ``scale`` (the length the set-up's fixed lengths are counted in; σ),
-    ``m_kin`` (K = ½ m_kin Σ v²)."""
-
-    window_kind: CheckpointKind
-    units: tuple[str, str]
-    scale: float
-    m_kin: float
-
-    def rc(self, sim) -> float:
-        """The cutoff of ``sim``'s model."""
-
-    def rlist(self) -> float:
-        """Cutoff plus neighbour skin."""
-
-    def kT(self, T: float) -> float:
-        """k_B T in energy units."""
-
-    def reservoir(self, cells: tuple[int, int, int], rho0: float, T0: float, dt: float,
-                  seed: int, tau_bath: float):  # fmt: skip
-        """A fully periodic FCC box at (ρ0, T0) under a thermostat."""
-
-    def periodic(self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float):
-        """A fully periodic NVE box of these atoms."""
-
-    def bulk_fields(self, run, L: np.ndarray) -> tuple[float, float, float]:
-        """(P_xx, (P_yy + P_zz)/2, T) of a periodic box."""
-
-    def domain(self, like, x: np.ndarray, v: np.ndarray, ids: np.ndarray, L: np.ndarray,
-               walls0: np.ndarray):  # fmt: skip
-        """The window's domain (walls along x), with the clock and time step of ``like``."""
-
-    def load(self, ds: xr.Dataset, source: str | os.PathLike | None):
-        """The simulation of a verified window checkpoint."""
-
-    def skip_force_rows(self, sim, n: int) -> None:
-        """Let ``sim`` skip the force on the frozen atoms with ids −1 … −n (the inflow copy),
-        where it can without changing the mobile atoms' motion."""
-
-
-class MDKit:
-    """What the window needs to know of the numba MD backend (``ParticleKit``): reduced LJ
-    units, the potential ``lj`` (its cutoff rc and list range rc + skin [σ]), checkpoint
-    kind ``MD_WINDOW_CHECKPOINT``; simulations are ``MDSimulation``s."""
-
-    window_kind: CheckpointKind = MD_WINDOW_CHECKPOINT
-    units = ("sigma", "sigma tau^-1")  # lengths, velocities (checkpoint attributes)
-    scale = 1.0  # σ: the unit of the set-up's fixed lengths
-
-    def __init__(self, lj: LJParams | None = None) -> None:
-        self.lj = lj
-
-    def rc(self, sim) -> float:
-        """The cutoff of ``sim``'s potential [σ]."""
-        return float(sim.lj.rc)
-
-    def rlist(self) -> float:
-        """rc + skin [σ]: the reservoir is at least 4 of these long."""
-        return float(self.lj.rlist)
-
-    def kT(self, T: float) -> float:
-        """k_B T [ε] of a temperature T [ε/k_B]."""
-        return T
-
-    m_kin = 1.0  # m·(velocity² → energy): K = ½ m_kin Σ v²
-
-    def reservoir(
-        self, cells: tuple[int, int, int], rho0: float, T0: float, dt: float, seed: int,
-        tau_bath: float,
-    ) -> MDSimulation:  # fmt: skip
-        """A fully periodic FCC box at (ρ0, T0) under the CSVR thermostat."""
-        state = fcc_state(cells, rho0, T0, seed, periodic_x=True)
-        return MDSimulation(state, self.lj, dt, T_bath=T0, tau_bath=tau_bath, seed=seed)
-
-    def periodic(self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float) -> MDSimulation:
-        """A fully periodic NVE box of these atoms (the snapshot, its pole run)."""
-        st = MDState(x=x, v=v, L=L.copy(), periodic=np.array([True, True, True]))
-        return MDSimulation(st, self.lj, dt)
-
-    def bulk_fields(self, run: MDSimulation, L: np.ndarray) -> tuple[float, float, float]:
-        """(P_xx, (P_yy + P_zz)/2, T) of a periodic box: one bin over all of it."""
-        from .profiles import fields_from_sums
-
-        f = fields_from_sums(run.profile_sums(float(L[0])), float(np.prod(L)))
-        return float(f["Pxx"][0]), 0.5 * float(f["Pyy"][0] + f["Pzz"][0]), float(f["T"][0])
-
-    def domain(
-        self, like: MDSimulation, x: np.ndarray, v: np.ndarray, ids: np.ndarray, L: np.ndarray,
-        walls0: np.ndarray,
-    ) -> MDSimulation:  # fmt: skip
-        """The window's domain: periodic across, walls along x, the clock and time step of
-        ``like`` (the piston run it is cut from)."""
-        s = like.state
-        state = MDState(x=x, v=v, L=L, periodic=np.array([False, True, True]), walls0=walls0,
-                        ids=ids)  # fmt: skip
-        state.time, state.step = s.time, s.step
-        return MDSimulation(state, like.lj, like.dt)
-
-    def load(self, ds: xr.Dataset, source: str | os.PathLike | None) -> MDSimulation:
-        return MDSimulation.from_dataset(ds, source)
-
-    def skip_force_rows(self, sim: MDSimulation, n: int) -> None:
-        """``MDSimulation.skip_force_rows``: the inflow copy leaves the force loop."""
-        sim.skip_force_rows(n)
-
-
-def _kit_of(sim) -> MDKit:
-    """The MD kit of an ``MDSimulation`` (the default when no kit is given)."""
-    return MDKit(sim.lj)
 
 
 @dataclass
