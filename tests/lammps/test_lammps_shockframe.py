@@ -107,6 +107,30 @@ def test_shock_frame_defaults_and_ranges() -> None:
         assert where in msg and "allowed range" in msg, msg
 
 
+def test_metal_msst_defaults_are_the_tuned_ones() -> None:
+    # copper (Cu_mishin1): mu 3000 without a kick left the cell at its pole; mu 300 with
+    # tscale 0.01 settles (docs/lammps.md)
+    cu = {"solver": "lammps", "phase": "crystal", "schemes": ["msst"],
+          "model": {"units": "metal", "pair_style": "eam/alloy",
+                    "pair_coeff": ["* * Cu_mishin1.eam.alloy Cu"], "mass": 63.546},
+          "sample": {"lattice_constant": 3.615, "T0": 300.0, "cells": [20, 5, 5]},
+          "shock": {"u_p": [1000.0]},
+          "reference": {"model": "linear_us_up", "c0": 3940.0, "s": 1.49, "source": "LASL"}}  # fmt: skip
+    f = validate_config({"scenes": {"cu": cu}})["scenes"]["cu"]["shock_frame"]
+    assert f["msst"] == {"q": 100.0, "mu": 300.0, "tscale": 0.01, "relax_time": 4.0}, f
+
+
+def test_up_reached_is_the_stop_rule_and_the_status_rule() -> None:
+    from hugomap.lammps.shockframe import up_reached
+
+    # copper MSST at 2000 m/s: 1997.74 +- 0.49 (-0.113 %), inside up_tolerance 0.2 %
+    assert up_reached(-2.26, 0.49, 2000.0, 0.01, 0.002)
+    assert not up_reached(-10.0, 0.49, 2000.0, 0.01, 0.002)  # 0.5 %: 20 errors out
+    assert up_reached(-10.0, 6.0, 2000.0, 0.01, 0.002)  # within 2 errors, error < 1 %
+    assert not up_reached(-60.0, 40.0, 2000.0, 0.01, 0.002)  # an error of 2 %: not by luck
+    assert not up_reached(math.nan, 0.1, 2000.0, 0.01, 0.002)
+
+
 # -- physics -------------------------------------------------------------------------------
 def _scene() -> dict:
     cfg = validate_config({"scenes": {"lj": copy.deepcopy(SCENE)}})

@@ -53,7 +53,7 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
         # compresses from the pole within ~7 tau; E - E0 fluctuates by 1.1 % over 6 tau
         "shock_frame": {"equilibrate_time": 2.0, "average_time": 12.0},
         "shock_frame.nphug": {"pdamp": 1.0, "tdamp": 0.5, "relax_time": 3.0},
-        "shock_frame.msst": {"q": 1.0, "mu": 30.0, "relax_time": 8.0},
+        "shock_frame.msst": {"q": 1.0, "mu": 30.0, "tscale": 0.0, "relax_time": 8.0},
     },
     "metal": {
         "model": {"skin": 1.0},
@@ -70,11 +70,13 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
                    "reservoir_equilibrate_time": 1.0, "reservoir_length": 0.0,
                    "settle_time": 2.0, "window_time": 2.0, "average_time": 3.0},
         "window.dichotomy": {"half_width": 200.0, "tolerance": 10.0},
-        # shock-frame schemes: times of a few sound transits of the ~30 A box; MSST's q and mu
-        # scaled from lj's by the atom mass, length and time of a metal (not tuned)
+        # shock-frame schemes: times of a few sound transits of the ~30 A box. MSST on copper
+        # (Cu_mishin1, 1000 m/s): mu 3000 with tscale 0 left the cell at its pole for 2.5 ps
+        # and then oscillating; mu 300 with a 1 % kick of the kinetic energy into the cell
+        # (tscale 0.01) settles on the Rayleigh line within the relax time
         "shock_frame": {"equilibrate_time": 1.0, "average_time": 4.0},
         "shock_frame.nphug": {"pdamp": 1.0, "tdamp": 0.1, "relax_time": 2.0},
-        "shock_frame.msst": {"q": 100.0, "mu": 3000.0, "relax_time": 4.0},
+        "shock_frame.msst": {"q": 100.0, "mu": 300.0, "tscale": 0.01, "relax_time": 4.0},
     },
 }  # fmt: skip
 #: Ranges that depend on the unit system: (key, lj range, metal range) (inclusive).

@@ -407,6 +407,17 @@ def box_sound_speed(box: FrameBox, params: Params, conv: Native, rho0: float) ->
     return math.sqrt(dP / (rho0 * STRAIN)) if dP > 0 else math.nan
 
 
+def up_reached(miss: float, err: float, u_p: float, tol: float, up_tolerance: float) -> bool:
+    """Whether a measured u_p that misses the scene's ``u_p`` by ``miss`` ± ``err`` (same
+    velocity units) is at it: within ``up_tolerance`` of u_p (the scene's ``shock_frame``
+    key), or within 2 of its error where that error is no larger than ``tol``
+    (``shock.residual_tol``) of u_p, so that a fix still swinging is not hit by luck. The
+    rule that ends the iteration and the one the status applies."""
+    if not math.isfinite(miss):
+        return False
+    return abs(miss) <= max(min(2.0 * err, tol * abs(u_p)), up_tolerance * abs(u_p))
+
+
 def shock_frame_point(
     scene: dict, scheme: str, u_p: float, pole: Pole, c0: float | None, rho_lattice: float | None
 ) -> tuple[dict[str, float], str, str, dict, dict[str, float]]:
@@ -499,10 +510,7 @@ def shock_frame_point(
                 target = next_target(scheme, its, u_p, pole, conv) if math.isfinite(
                     st["D"]) else target * 1.2  # fmt: skip
                 continue
-            # within 2 errors (an error no larger than residual_tol of u_p: a fix still
-            # swinging is not hit by luck) or within up_tolerance
-            if abs(miss) <= max(min(2.0 * st["u_p_err"], tol * abs(u_p)),
-                                prm.up_tolerance * abs(u_p)):  # fmt: skip
+            if up_reached(miss, st["u_p_err"], u_p, tol, prm.up_tolerance):
                 break
             target = next_target(scheme, its, u_p, pole, conv)
         steps = box.steps
@@ -531,9 +539,9 @@ def shock_frame_point(
     values["n_samples"] = st["n_samples"]
     values["atom_steps"] = float(n * steps)
     miss = (st["u_p"] - u_p) / u_p
-    miss_err = st["u_p_err"] / abs(u_p)
     closes = {k: _closes(v, res_err[k], tol) for k, v in res.items()}
-    closes["u_p"] = math.isfinite(miss) and _closes(miss, miss_err, tol)
+    # the rule that ended the iterations: a point the loop accepted is not refused for it
+    closes["u_p"] = up_reached(st["u_p"] - u_p, st["u_p_err"], u_p, tol, prm.up_tolerance)
     finite = all(math.isfinite(st[k]) for k in ("D", "u_p", "rho", "P", "E"))
     ok = finite and all(closes.values())
     values["converged"] = ok
