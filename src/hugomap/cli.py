@@ -17,7 +17,8 @@ import logging
 import sys
 import textwrap
 
-USER_COMMANDS = ("check-config", "status", "export-lammps", "figures", "history", "replicas")
+USER_COMMANDS = ("check-config", "status", "export-lammps", "figures", "history", "profile",
+                 "replicas")  # fmt: skip
 STAGE_COMMANDS = (
     "prepare", "load", "piston", "reference", "window", "amw", "mw", "dichotomy-state",
     "dichotomy-trial", "dichotomy-point", "shockframe", "aggregate", "campaign",
@@ -113,6 +114,12 @@ def main(argv: list[str] | None = None) -> int:
     p = add("history", help="history figure of one window point")
     p.add_argument("point")
     p.add_argument("--out", required=True)
+    p = add("profile", help="the shock's profile in the front's frame from a piston checkpoint "
+                            "(loaded.nc): density, velocity, stresses, temperature")  # fmt: skip
+    p.add_argument("checkpoint", help="results/<scene>/up<u>/loaded.nc")
+    p.add_argument("--out", required=True, help="the figure (PNG)")
+    p.add_argument("--samples", type=int, default=10, help="last samples averaged (default 10)")
+    p.add_argument("--merge", type=int, default=2, help="bins per point (default 2)")
     p = add("check-config", help="validate a YAML config")
     p.add_argument("config")
     p = add("status", help="a sweep's progress: points done, running, failed, pending per scene")
@@ -249,6 +256,16 @@ def main(argv: list[str] | None = None) -> int:
         from .figures import window_history_figure
 
         window_history_figure(args.point, args.out)
+    elif args.cmd == "profile":
+        from .figures import profile_figure
+        from .stages.profile import front_profile
+
+        try:
+            prof = front_profile(args.checkpoint, args.samples, args.merge)
+        except ValueError as exc:
+            print(exc, file=sys.stderr)
+            return 2
+        profile_figure(prof, args.out)
     elif args.cmd == "check-config":
         from .config import ConfigError, load_config
 

@@ -188,6 +188,47 @@ def window_history_figure(point: str | os.PathLike, out: str | os.PathLike) -> N
     plt.close(fig)
 
 
+#: How a profile field is drawn: (axis label, SI scale, SI unit shown) for SI datasets.
+PROFILE_SI = {"x": (1e10, "Å"), "rho": (1.0, "kg/m³"), "u": (1.0, "m/s"), "P": (1e-9, "GPa"),
+              "T": (1.0, "K")}  # fmt: skip
+
+
+def profile_figure(prof: dict, out: str | os.PathLike) -> None:
+    """The front-frame profile of ``stages.profile.front_profile``: density, x velocity,
+    P_xx with P_yy and P_zz (their gap: the shear stress a crystal holds, 2τ = P_xx −
+    (P_yy + P_zz)/2), and temperature against the distance from the front (ahead > 0)."""
+    si = prof["units"]["x"] == "m"
+    units = prof["units"]
+
+    def scaled(k: str) -> tuple[np.ndarray, str]:
+        v = np.asarray(prof[k], dtype=float)
+        if si:
+            f, u = PROFILE_SI["P" if k in ("Pyy", "Pzz") else k]
+            return v * f, u
+        return v, units[k]
+
+    x, xu = scaled("x")
+    fig, axes = plt.subplots(4, 1, figsize=(5.5, 8.0), dpi=110, sharex=True)
+    for ax, k, label in ((axes[0], "rho", "density ρ"), (axes[1], "u", "x velocity u"),
+                         (axes[3], "T", "temperature T")):  # fmt: skip
+        v, u = scaled(k)
+        ax.plot(x, v, ".-", ms=3)
+        ax.set_ylabel(f"{label} [{u}]")
+    for k, style in (("P", ".-"), ("Pyy", "--"), ("Pzz", ":")):
+        v, u = scaled(k)
+        axes[2].plot(x, v, style, ms=3, label={"P": "P_xx"}.get(k, "P_" + k[1:]))
+    axes[2].set_ylabel(f"stress [{u}]")
+    axes[2].legend(fontsize=7)
+    for ax in axes:
+        ax.axvline(0.0, color="k", lw=0.6)
+    axes[-1].set_xlabel(f"x − x_front [{xu}] (ahead of the front > 0)")
+    axes[0].set_title(f"{prof['scene']}: {prof['samples']} samples in the front's frame, "
+                      f"bins merged by {prof['merge']}", fontsize=9)  # fmt: skip
+    fig.tight_layout()
+    fig.savefig(out)
+    plt.close(fig)
+
+
 # -- the validation campaign (hugomap.campaign) ---------------------------------------------
 SCHEME_MARKERS = {"piston": "s", "amw": "o", "mw": "^", "dichotomy": "D"}
 OUTCOME_COLORS = {"ok": "tab:green", "not_converged": "goldenrod"}

@@ -73,6 +73,9 @@ log = logging.getLogger("hugomap")
 #: 8 Å, beyond the walls' disturbed planes (an EAM cutoff, 5.5 Å for Cu_mishin1, and more).
 WALL_LAYER = {"lj": 4.0, "metal": 8.0}
 POLE_EVERY = 25  # steps between pole samples (the MD backend's)
+#: Longitudinal sound speed of a crystal [σ/τ | Å/ps] where the scene gives none (lj: an
+#: FCC LJ solid near its triple point; metal: copper [100]), for ``_damp_acoustics``.
+CRYSTAL_SOUND = {"lj": 8.0, "metal": 44.0}
 
 # Cost model, measured on the 2-core development machine (one rank, one OpenMP thread):
 # LJ rc 2.5 at rho 0.8 ran 1.5e-6 s per atom-step under load (``run`` of 1920 atoms);
@@ -209,7 +212,9 @@ class LammpsBackend:
         """FCC at (ρ0, T0) between the walls, thermostatted (CSVR) for
         ``sample.equilibrate_time`` while ``md.sample.size_bulk`` sizes the box (a fluid:
         L_x stretched so the bulk, ``WALL_LAYER`` from the walls, is at ρ0; a crystal keeps
-        its lattice) and ends at the canonical mean energy of T0; then NVE for
+        its lattice) and ends at the canonical mean energy of T0 (a crystal: first
+        ``equilibrate_time`` under a Langevin thermostat, ``_damp_acoustics``, then half
+        as long under CSVR); then NVE for
         ``sample.pole_time`` while the pole is measured between ``WALL_LAYER`` and
         L_x − ``WALL_LAYER``: ρ0 [σ⁻³], P0 = P_xx, Pyy0 [ε σ⁻³], E0 [ε per atom], T0
         [ε/k_B], block averages (8 blocks) with standard errors. Info: what the sizing
@@ -232,10 +237,13 @@ class LammpsBackend:
         n_eq = int(round(s["equilibrate_time"] / s["dt"]))
         info: dict[str, Any] = {}
         layer = WALL_LAYER[us.name]
+        if scene["phase"] == "crystal" and n_eq > 0:
+            info["langevin"] = self._damp_acoustics(sim, scene, n_eq)
+            n_eq = max(n_eq // 2, 1)  # then CSVR, to end at the canonical energy (size_bulk)
         if n_eq > 0:
             # size_bulk's "T0" is k_B T0 in the energy unit of sim.energies() (lj: T0)
-            info = size_bulk(sim, s["rho0"], us.k_B * s["T0"], n_eq, layer,
-                             resize=scene["phase"] != "crystal")  # fmt: skip
+            info.update(size_bulk(sim, s["rho0"], us.k_B * s["T0"], n_eq, layer,
+                                  resize=scene["phase"] != "crystal"))  # fmt: skip
             info["T_nvt"] = info["T_nvt"] / us.k_B  # [ε/k_B | K]
             log.info("sample sized: %s", json.dumps(info))
         sim.T_bath = None
@@ -256,6 +264,23 @@ class LammpsBackend:
         for k, name in keys.items():
             pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
         return sim, Pole.from_dict(pole), {"sizing": info}
+
+    def _damp_acoustics(self, sim, scene: dict, n_steps: int) -> dict[str, float]:
+        """A crystal's first ``n_steps`` under a Langevin thermostat at T0
+        (``LammpsSimulation.run_langevin``), its damping time L_x/(2π c) (``CRYSTAL_SOUND``:
+        c of the unit system, or the reference's c0): critical for the box's slowest
+        standing sound wave, whose frequency is π c/L_x, so every mode decays by at least
+        e^(−t c π/L_x). Why: a perfect lattice heated from T = 0 between walls builds its
+        thermal pressure in a fraction of a ps and launches sound waves from both walls,
+        which a crystal hardly damps and CSVR keeps; Cu_mishin1, cells [60, 6, 6], 2 ps of
+        CSVR left slab-mean velocities of ±50 m/s (7 m/s thermal noise), the material ahead
+        of every front moving at 40–50 m/s. Returns the damping time and steps."""
+        s, us = scene["sample"], self.usys
+        c = self.sound_speed(scene)
+        c_native = CRYSTAL_SOUND[us.name] if c is None else self._native_velocity(c)
+        damp = float(sim.L[0]) / (2.0 * math.pi * c_native)
+        sim.run_langevin(float(s["T0"]), damp, n_steps)
+        return {"damp": damp, "steps": float(n_steps)}
 
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
         """Save a simulation, a window or their SI views (each saves what it holds)."""

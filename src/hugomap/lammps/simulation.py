@@ -321,6 +321,23 @@ class LammpsSimulation(PerAtomAccess):
                 "fix_modify hm_csvr temp hm_temp",
             ])  # fmt: skip
 
+    def run_langevin(self, T: float, damp: float, n_steps: int) -> None:
+        """``n_steps`` under a Langevin thermostat (LAMMPS ``fix langevin``: a friction m/damp
+        and a random force on every mobile atom; target ``T`` [ε/k_B | K], ``damp`` [τ | ps])
+        with the CSVR one off meanwhile. CSVR scales every velocity alike and so keeps a
+        crystal's coherent (acoustic) motion; a local friction damps it."""
+        keep = self.T_bath
+        self.T_bath = None
+        self._cmds([f"fix hm_lgv hm_mobile langevin {_f(T)} {_f(T)} {_f(damp)} "
+                    f"{self.seed + 7 + self.step % 100000}"])  # fmt: skip
+        self._setup_needed = True
+        try:
+            self.advance(n_steps)
+        finally:
+            self._cmds(["unfix hm_lgv"])
+            self._setup_needed = True
+            self.T_bath = keep
+
     # -- clock and time loop -----------------------------------------------------------------
     @property
     def dt(self) -> float:
