@@ -424,3 +424,28 @@ def test_corrupted_loading_checkpoint_fails_the_point(piston_run: dict, tmp_path
         stages.piston_point(loaded, piston_run["scene"], piston_run["u_p"], out)
     assert str(loaded) in str(info.value)
     assert not out.exists()
+
+
+def test_profile_of_the_loading_checkpoint(piston_run: dict, tmp_path: Path) -> None:
+    """``hugomap profile`` of the loading checkpoint: in the piston frame the shocked liquid
+    behind the front is at rest and the material ahead moves at −u_p (the frame is exact;
+    the last 10 samples' mean over 6 σ either side has a thermal error of ~0.03 σ/τ, so 10 %
+    of u_p fails only a wrong frame or a misplaced front), and the liquid is compressed
+    behind it (ρ/ρ0 ≈ 1.35 at u_p = 2.5 on the tiny liquid; 1.15 bounds it from below)."""
+    from hugomap.cli import main
+    from hugomap.stages.profile import front_profile
+
+    u_p = piston_run["u_p"]
+    p = front_profile(piston_run["loaded"], samples=10, merge=1)
+    x, u, rho = p["x"], p["u"], p["rho"]
+    # 4 σ clear of the front's own width (its tracked position is mid-rise)
+    behind, ahead = (x > -10.0) & (x < -4.0), (x > 4.0) & (x < 10.0)
+    assert abs(np.nanmean(u[behind])) < 0.1 * u_p, (x, u)
+    assert abs(np.nanmean(u[ahead]) + u_p) < 0.1 * u_p, (x, u)
+    assert np.nanmean(rho[behind]) / np.nanmean(rho[ahead]) > 1.15, (x, rho)
+    assert p["units"]["P"] == "epsilon sigma^-3" and p["samples"] == 10
+    out = tmp_path / "profile.png"
+    assert main(["profile", str(piston_run["loaded"]), "--out", str(out)]) == 0
+    assert out.stat().st_size > 10_000
+    # a point file has no profile history: refused with a message, exit status 2
+    assert main(["profile", str(piston_run["ref"]), "--out", str(tmp_path / "x.png")]) == 2
