@@ -38,7 +38,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="hugomap", usage="hugomap [-h] [--version] <command> ...",
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        description="Shock Hugoniots from LJ molecular dynamics and contact SPH.",
+        description="Shock Hugoniots from molecular dynamics (numba LJ, LAMMPS) and contact SPH.",
     )  # fmt: skip
     ap.add_argument("--version", action="version", version=f"hugomap {__version__}")
     sub = ap.add_subparsers(dest="cmd", metavar="<command>", help=argparse.SUPPRESS)
