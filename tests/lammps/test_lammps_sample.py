@@ -59,7 +59,7 @@ def _slab_rms(sim, n_slabs: int, samples: int, every: int) -> float:
 
 
 def test_langevin_damps_a_crystals_sound_wave_that_csvr_keeps() -> None:
-    """The crystal's preparation (``LammpsBackend._damp_acoustics``): a standing sound wave
+    """The crystal's preparation (``LammpsBackend.prepare``): a standing sound wave
     between the walls, v_x += A sin(π x/L) with A = 0.5 σ/τ, in an LJ FCC crystal (ρ 1.1,
     T 0.5, cells [20, 4, 4]: 1,280 atoms, L_x 31 σ, 256 atoms a slab of 5). Thermal noise of
     a slab mean: √(T/256) = 0.044 σ/τ. After 6 τ (about one period 2 L_x/c, c ≈ 9 σ/τ)

@@ -74,7 +74,7 @@ log = logging.getLogger("hugomap")
 WALL_LAYER = {"lj": 4.0, "metal": 8.0}
 POLE_EVERY = 25  # steps between pole samples (the MD backend's)
 #: Longitudinal sound speed of a crystal [σ/τ | Å/ps] where the scene gives none (lj: an
-#: FCC LJ solid near its triple point; metal: copper [100]), for ``_damp_acoustics``.
+#: FCC LJ solid near its triple point; metal: copper [100]), for a crystal's Langevin phase.
 CRYSTAL_SOUND = {"lj": 8.0, "metal": 44.0}
 
 # Cost model, measured on the 2-core development machine (one rank, one OpenMP thread):
@@ -213,7 +213,7 @@ class LammpsBackend:
         ``sample.equilibrate_time`` while ``md.sample.size_bulk`` sizes the box (a fluid:
         L_x stretched so the bulk, ``WALL_LAYER`` from the walls, is at ρ0; a crystal keeps
         its lattice) and ends at the canonical mean energy of T0 (a crystal: first
-        ``equilibrate_time`` under a Langevin thermostat, ``_damp_acoustics``, then half
+        ``equilibrate_time`` under a Langevin thermostat, ``run_langevin``, then half
         as long under CSVR); then NVE for
         ``sample.pole_time`` while the pole is measured between ``WALL_LAYER`` and
         L_x − ``WALL_LAYER``: ρ0 [σ⁻³], P0 = P_xx, Pyy0 [ε σ⁻³], E0 [ε per atom], T0
@@ -238,7 +238,11 @@ class LammpsBackend:
         info: dict[str, Any] = {}
         layer = WALL_LAYER[us.name]
         if scene["phase"] == "crystal" and n_eq > 0:
-            info["langevin"] = self._damp_acoustics(sim, scene, n_eq)
+            c = self.sound_speed(scene)  # the reference's c0, else the unit system's
+            c = CRYSTAL_SOUND[us.name] if c is None else self._native_velocity(c)
+            damp = float(sim.L[0]) / (2.0 * math.pi * c)  # critical: slowest standing wave
+            sim.run_langevin(float(s["T0"]), damp, n_eq)
+            info["langevin"] = {"damp": damp, "steps": float(n_eq)}
             n_eq = max(n_eq // 2, 1)  # then CSVR, to end at the canonical energy (size_bulk)
         if n_eq > 0:
             # size_bulk's "T0" is k_B T0 in the energy unit of sim.energies() (lj: T0)
@@ -264,23 +268,6 @@ class LammpsBackend:
         for k, name in keys.items():
             pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
         return sim, Pole.from_dict(pole), {"sizing": info}
-
-    def _damp_acoustics(self, sim, scene: dict, n_steps: int) -> dict[str, float]:
-        """A crystal's first ``n_steps`` under a Langevin thermostat at T0
-        (``LammpsSimulation.run_langevin``), its damping time L_x/(2π c) (``CRYSTAL_SOUND``:
-        c of the unit system, or the reference's c0): critical for the box's slowest
-        standing sound wave, whose frequency is π c/L_x, so every mode decays by at least
-        e^(−t c π/L_x). Why: a perfect lattice heated from T = 0 between walls builds its
-        thermal pressure in a fraction of a ps and launches sound waves from both walls,
-        which a crystal hardly damps and CSVR keeps; Cu_mishin1, cells [60, 6, 6], 2 ps of
-        CSVR left slab-mean velocities of ±50 m/s (7 m/s thermal noise), the material ahead
-        of every front moving at 40–50 m/s. Returns the damping time and steps."""
-        s, us = scene["sample"], self.usys
-        c = self.sound_speed(scene)
-        c_native = CRYSTAL_SOUND[us.name] if c is None else self._native_velocity(c)
-        damp = float(sim.L[0]) / (2.0 * math.pi * c_native)
-        sim.run_langevin(float(s["T0"]), damp, n_steps)
-        return {"damp": damp, "steps": float(n_steps)}
 
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
         """Save a simulation, a window or their SI views (each saves what it holds)."""

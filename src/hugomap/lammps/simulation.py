@@ -325,7 +325,12 @@ class LammpsSimulation(PerAtomAccess):
         """``n_steps`` under a Langevin thermostat (LAMMPS ``fix langevin``: a friction m/damp
         and a random force on every mobile atom; target ``T`` [ε/k_B | K], ``damp`` [τ | ps])
         with the CSVR one off meanwhile. CSVR scales every velocity alike and so keeps a
-        crystal's coherent (acoustic) motion; a local friction damps it."""
+        crystal's coherent (acoustic) motion; a local friction damps it. A perfect lattice
+        heated from T = 0 between walls builds its thermal pressure in a fraction of a ps and
+        launches sound waves from both walls (Cu_mishin1, cells [60, 6, 6]: after 2 ps of
+        CSVR, slab-mean velocities of ±50 m/s against 7 m/s of thermal noise). With damp =
+        L_x/(2π c), critical for the box's slowest standing wave (frequency π c/L_x), every
+        mode decays by at least e^(−t π c/L_x)."""
         keep = self.T_bath
         self.T_bath = None
         self._cmds([f"fix hm_lgv hm_mobile langevin {_f(T)} {_f(T)} {_f(damp)} "
