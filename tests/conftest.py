@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import pytest
 
@@ -37,10 +38,12 @@ HEAVIEST_FIRST = (
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Collect the heaviest files first (``HEAVIEST_FIRST``), the rest in their own order."""
     rank = {name: i for i, name in enumerate(HEAVIEST_FIRST)}
+    here = Path(__file__).parent
 
     def key(item: pytest.Item) -> int:
-        path = item.path.as_posix()
-        return next((r for name, r in rank.items() if path.endswith("tests/" + name)), len(rank))
+        path = item.path
+        rel = path.relative_to(here).as_posix() if path.is_relative_to(here) else ""
+        return rank.get(rel, len(rank))
 
     items.sort(key=key)  # stable: a file's tests keep their order
 
