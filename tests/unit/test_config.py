@@ -24,6 +24,14 @@ def test_default_config_is_valid_and_filled() -> None:
     assert len(sh["u_p"]) >= 6 and len(cfg["scenes"]["lj_fcc"]["shock"]["u_p"]) >= 6
 
 
+@pytest.mark.parametrize("path", sorted((ROOT / "config").glob("*.yaml")), ids=lambda p: p.name)
+def test_every_shipped_config_validates(path: Path) -> None:
+    """Each config the README names runs through the same validation as a sweep: a schema
+    change that leaves one behind is caught here, not by the user's first job."""
+    cfg = load_config(path)
+    assert cfg["scenes"], f"{path.name}: no scenes after expansion"
+
+
 @pytest.mark.parametrize(
     ("path", "value", "expect"),
     [
