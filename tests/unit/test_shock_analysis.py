@@ -168,6 +168,30 @@ def test_a_slab_that_still_flows_is_not_ok_and_the_point_says_why():
     assert r["status"] == "ok", r["diagnostic"]
 
 
+def test_P_error_takes_only_the_flow_beyond_its_noise():
+    """A slab flowing 2 % of u_p (40 of its errors) carries momentum ρ0 D δu = 0.06 that P's
+    error must hold; a slab at rest adds nothing beyond its noise (its velocity noise is
+    the acoustic motion whose pressure swings P's block error already holds), so there
+    P_flow_err = ρ0 D √max(0, δu² − σ²) is zero where |δu| ≤ σ."""
+    from hugomap.analysis.shock import beyond_noise, measure_point
+
+    assert beyond_noise(0.3, 0.4) == 0.0 and beyond_noise(-0.5, 0.3) == pytest.approx(0.4)
+    h, pole = _toy_run(0.0, 0.0005, flow=-0.02)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                      residual_tol=0.01)  # fmt: skip
+    assert r["P_flow_err"] == pytest.approx(3.0 * 0.02, rel=0.02)
+    assert r["P_err"] >= r["P_flow_err"]
+    seen_zero = False
+    for seed in range(6):
+        h, pole = _toy_run(0.0, 0.002, seed=seed)
+        r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                          residual_tol=0.01)  # fmt: skip
+        du, s = r["u_p_measured"] - 1.0, r["u_p_measured_err"]
+        assert r["P_flow_err"] == pytest.approx(r["D"] * beyond_noise(du, s), abs=1e-12)
+        seen_zero |= abs(du) <= s and r["P_flow_err"] == 0.0
+    assert seen_zero
+
+
 def test_partial_compaction_is_named_beyond_its_tolerance_and_errors():
     """A porous slab's distention: 1.05 ± 0.002 is partial compaction (named); 1.003 (below
     COMPACTION_TOL) and 1.02 ± 0.01 (within 3 errors) are not; a solid slab has none."""

@@ -70,7 +70,11 @@ POINT_VARS: dict[str, tuple[str, str]] = {
         "uncertainty of the jump from the shocked slab's own flow "
         "(hypot(u_p_measured - u_p, its error))",
     ),
-    "P_flow_err": (P_UNIT, "part of P_err from that flow: rho0 D u_p_flow_err"),
+    "P_flow_err": (
+        P_UNIT,
+        "part of P_err from that flow beyond its noise: "
+        "rho0 D sqrt(max(0, (u_p_measured - u_p)^2 - u_p_measured_err^2))",
+    ),
     "n_samples": ("1", "profile samples averaged"),
     "wall_s": ("s", "wall-clock time of the point (load + drive)"),
     "cpu_s": ("s", "CPU time of the point (load + drive), all threads"),
