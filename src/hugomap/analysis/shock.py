@@ -145,8 +145,6 @@ def excess_spread(a: np.ndarray, b: np.ndarray, n_blocks: int = 8) -> float:
     their difference for a deterministic solver's non-uniform slab or a drifting one."""
     d = np.asarray(b, dtype=float) - np.asarray(a, dtype=float)
     m, e = block_average(d, n_blocks)
-    if not np.isfinite(m):
-        return 0.0
     return 0.5 * beyond_noise(m, e if np.isfinite(e) else 0.0)
 
 
@@ -496,7 +494,7 @@ def measure_point(
     out["u_p_flow_err"] = flow
     # P's error gains only the flow beyond its noise: the slab's velocity noise is acoustic
     # motion whose pressure swings (δP = Z δu) P's own block error already holds
-    P_stat = float(out["P_err"])
+    P_stat = float(out["P_err"])  # without the flow: in the residuals it enters through u
     P_flow = pole.rho0 * abs(D) * beyond_noise(du, u_s_err) if np.isfinite(D) else 0.0
     out["P_flow_err"] = float(P_flow)
     out["P_err"] = float(np.hypot(P_stat, P_flow))
@@ -516,7 +514,6 @@ def measure_point(
     )
     out["two_wave"] = float(two_wave)
     vals = {"D": D, "u": u_p, "rho": rho, "P": P, "E": E}
-    # P's error without the flow term: the flow enters the residuals through u
     errs = {"D": D_err, "u": flow, "rho": out["rho_err"], "P": P_stat, "E": out["E_err"]}
     if two_wave:
         vals.update(rho1=out["ahead_rho"], P1=out["ahead_P"], E1=out["ahead_E"],
