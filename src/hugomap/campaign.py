@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 
 from .analysis.replicas import replica_cases
+from .analysis.shock import CLOSURES
 from .campaign_expand import (  # noqa: F401 (re-exported: the campaign's public names)
     DEFAULT_NAME,
     SEP,
@@ -164,6 +165,11 @@ POINT_COLUMNS: dict[str, tuple[str, str]] = {
     "err_D_err": ("1", "standard error of err_D (the point's and the reference's)"),
     "err_P": ("1", "relative error of P from the reference Hugoniot at u_eval: P/P_ref - 1"),
     "err_P_err": ("1", "standard error of err_P (the point's and the reference's)"),
+    **{
+        f"residual_{k}{e}": ("1", f"{w} of the point's {k} closure (0 for a steady shock)")
+        for k in CLOSURES
+        for e, w in (("", "residual"), ("_err", "standard error"))
+    },
     "cpu_s": ("s", "CPU time of the point, every stage it needed (load, window, run), all threads"),
     "wall_s": ("s", "wall-clock time of the point, every stage it needed"),
     "n_window": ("1", "particles in the window at the upstream density (resolution)"),
@@ -262,6 +268,9 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
                     xe = xe if math.isfinite(xe) else math.nan
                     row[f"err_{q}_err"] = math.hypot(xe / xr_, x * xre / xr_**2)
                 row["D_over_c0"] = (val("D") if usable else math.nan) / c0
+                for k in CLOSURES:
+                    for e in ("", "_err"):
+                        row[f"residual_{k}{e}"] = val(f"residual_{k}{e}") if usable else math.nan
                 rows.append(row)
     if not rows:
         raise ValueError("the campaign's aggregates hold no points")
@@ -377,7 +386,9 @@ def _rms_error(e: np.ndarray, se: np.ndarray, rms: float) -> float:
 def replica_statistics(ds: xr.Dataset, cases: Sequence[str]) -> dict:
     """``analysis.replicas.replica_summary`` of each replica case's points, grouped by
     scheme and u_p, for D and P (their relative errors against the reference, with the
-    combined errors): over the usable points (ok or not_converged) and over the ok ones."""
+    combined errors) and for each closure's residual ``residual_<k>`` (whose reference is 0,
+    with the point's own error: do the residuals' errors hold too?): over the usable points
+    (ok or not_converged) and over the ok ones."""
     from .analysis.replicas import replica_summary
 
     out = {}
@@ -389,6 +400,8 @@ def replica_statistics(ds: xr.Dataset, cases: Sequence[str]) -> dict:
             groups = [(str(a), round(float(b), 6)) for a, b in
                       zip(ds["scheme"].values[m], ds["u_p_over_c0"].values[m], strict=True)]  # fmt: skip
             vals = {q: (ds[f"err_{q}"].values[m], ds[f"err_{q}_err"].values[m]) for q in ("D", "P")}
+            vals |= {f"residual_{k}": (ds[f"residual_{k}"].values[m],
+                                       ds[f"residual_{k}_err"].values[m]) for k in CLOSURES}  # fmt: skip
             out.setdefault(case, {})[which] = replica_summary(groups, vals)
         out[case]["n_points"] = int(sel.sum())
         out[case]["n_ok"] = int((sel & (ds["status"].values == "ok")).sum())

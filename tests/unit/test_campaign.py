@@ -136,9 +136,10 @@ def test_md_c0_is_the_reference_line_intercept():
     assert math.isnan(cp.case_c0(xr.Dataset(), {"solver": "md"}))
 
 
-def _aggregates(tmp_path: Path, cfg: dict, outcome) -> list[Path]:
+def _aggregates(tmp_path: Path, cfg: dict, outcome, extra=None) -> list[Path]:
     """Aggregates of every campaign scene from synthetic point files: D = D_ref (1 + e) with
-    e and the status from ``outcome(scene, scheme, u)``; the reference D = c0 + s u_p."""
+    e and the status from ``outcome(scene, scheme, u)``; the reference D = c0 + s u_p;
+    ``extra(scene, scheme, u)``: more values of a usable point (e.g. its residuals)."""
     ups = np.linspace(50.0, 1500.0, 30)
     ref = xr.Dataset({
         "u_p": ("point", ups), "D": ("point", C0 + S * ups),
@@ -157,6 +158,7 @@ def _aggregates(tmp_path: Path, cfg: dict, outcome) -> list[Path]:
                 if status in cp.USABLE:
                     values.update(D=D, D_err=0.001 * D, P=8930.0 * D * u, P_err=1e3,
                                   converged=status == "ok")  # fmt: skip
+                    values.update(extra(name, scheme, u) if extra else {})
                 f = tmp_path / name / f"{scheme}_{u:g}.nc"
                 f.parent.mkdir(exist_ok=True)
                 ds = point_dataset(values, {"rho0": 8930.0}, None, scheme, name, status,
@@ -197,6 +199,7 @@ def test_dataset_errors_labels_and_settings(tmp_path):
     for _, r in bad.iterrows():
         assert (r.failure_class, r.cause) == FAILURES[r.status]
         assert math.isnan(r.err_D) and math.isnan(r.err_P) and math.isnan(r.D_over_c0)
+        assert math.isnan(r.residual_flow) and math.isnan(r.residual_flow_err)
     assert (pts[pts.status == "ok"].failure_class == "").all()
     # the stability rows carry the axis and its unit
     b = pts[pts.axis == "beta"]
@@ -219,6 +222,33 @@ def test_dataset_errors_labels_and_settings(tmp_path):
     # beaten) -> the two pistons; amw coarse has no error
     front = st[st.setting_pareto_D == 1].index.tolist()
     assert sorted(front) == [("piston", "coarse"), ("piston", "mid")]
+
+
+def test_replica_study_checks_the_closures_errors_too(tmp_path):
+    """A replica case (resolutions that set only the seed) gets chi-square and pulls for each
+    closure's residual as for D and P, against 0 with the point's own error. Four seeds
+    whose slabs flow by +2, -2, +2, -2 of their errors (0.01 each) and whose mass closes
+    exactly: per u_p the weighted mean flow is 0, so chi2_red = 4 * 2^2 / 3 = 16/3 and the
+    RMS pull 2; the mass gives 0 and 0."""
+    cfg = validate_config({"campaign": {"name": "rep", "cases": {"liq": {
+        "scene": {"solver": "md", "phase": "liquid", "schemes": ["piston"],
+                  "sample": {"rho0": 0.8, "T0": 2.0, "cells": [36, 4, 4], "seed": 1},
+                  "shock": {"u_p": [1.0, 2.0]}},
+        "resolutions": {f"s{i}": {"sample.seed": i} for i in range(1, 5)}}}}})  # fmt: skip
+
+    def extra(name: str, scheme: str, u: float) -> dict:
+        sign = 1.0 if int(name[-1]) % 2 else -1.0
+        return {"residual_flow": 0.02 * sign, "residual_flow_err": 0.01,
+                "residual_mass": 0.0, "residual_mass_err": 0.01}  # fmt: skip
+
+    aggs = _aggregates(tmp_path, cfg, lambda *_: (0.0, "ok", 1.0), extra)
+    ds = cp.campaign_dataset(cfg, {Path(a).stem: a for a in aggs})
+    assert sorted(ds["residual_flow"].values) == [-0.02] * 4 + [0.02] * 4
+    assert np.isnan(ds["residual_energy"].values).all()  # the points carry none
+    r = json.loads(ds.attrs["replicas"])["liq"]["usable"]
+    assert r["residual_flow_chi2_red"] == pytest.approx(16.0 / 3.0, rel=1e-12)
+    assert r["residual_flow_pull_rms"] == pytest.approx(2.0, rel=1e-12)
+    assert r["residual_mass_chi2_red"] == 0.0 and r["residual_mass_pull_rms"] == 0.0
 
 
 def test_cli_writes_dataset_chart_and_map(tmp_path):
