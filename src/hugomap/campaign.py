@@ -391,6 +391,8 @@ def replica_statistics(ds: xr.Dataset, cases: Sequence[str]) -> dict:
     (ok or not_converged) and over the ok ones."""
     from .analysis.replicas import replica_summary
 
+    # quantity -> its column (and <column>_err): D, P against the reference, residuals against 0
+    cols = {"D": "err_D", "P": "err_P"} | {f"residual_{k}": f"residual_{k}" for k in CLOSURES}
     out = {}
     for case in cases:
         sel = ds["case"].values == case
@@ -399,9 +401,7 @@ def replica_statistics(ds: xr.Dataset, cases: Sequence[str]) -> dict:
             m = sel & keep
             groups = [(str(a), round(float(b), 6)) for a, b in
                       zip(ds["scheme"].values[m], ds["u_p_over_c0"].values[m], strict=True)]  # fmt: skip
-            vals = {q: (ds[f"err_{q}"].values[m], ds[f"err_{q}_err"].values[m]) for q in ("D", "P")}
-            vals |= {f"residual_{k}": (ds[f"residual_{k}"].values[m],
-                                       ds[f"residual_{k}_err"].values[m]) for k in CLOSURES}  # fmt: skip
+            vals = {q: (ds[c].values[m], ds[c + "_err"].values[m]) for q, c in cols.items()}
             out.setdefault(case, {})[which] = replica_summary(groups, vals)
         out[case]["n_points"] = int(sel.sum())
         out[case]["n_ok"] = int((sel & (ds["status"].values == "ok")).sum())

@@ -4,8 +4,8 @@
 aggregated by the workflow's own stage (``python -m hugomap aggregate``'s ``cli.main``, run in
 a subprocess so its peak resident memory is its own: ``VmHWM`` of ``/proc/self/status``,
 reset just before the stage runs; not ``ru_maxrss``, which Linux carries over from the
-parent across fork and exec, so that the pytest worker's own size hid any growth below it). Each file carries a
-front history of ``N_HISTORY`` samples (t, front: float64; stage: int8), 136 kB per point
+parent across fork and exec, so that the pytest worker's own size hid any growth below
+it). Each file carries a front history of ``N_HISTORY`` samples (t, front: float64; stage: int8), 136 kB per point
 (twice a real piston run's 68 kB, so that a reader of the histories exceeds the bound at
 1000 points), which aggregation must not read.
 
