@@ -325,3 +325,46 @@ def test_csvr_thermostat_reaches_target():
     # relative standard error of a standard deviation is about √(τ_int / t).
     assert abs(temps.std() / sigma_T - 1) < 4 * np.sqrt(2 * tau / t_prod)
     assert abs(np.sum(sim.state.v, axis=0)).max() < 1e-10  # CSVR scales v: P stays 0
+
+
+class _Slabs:
+    """Two 10-σ slabs of mobile atoms between walls at 0 and 20 σ (duck-typed for
+    ``md.sample.flatten_temperature``), the left at temperature 1, the right at 3, each
+    with its own mean velocity."""
+
+    def __init__(self) -> None:
+        rng = np.random.default_rng(7)
+        n = 400
+        x = np.column_stack([np.r_[rng.uniform(0.5, 9.5, n), rng.uniform(10.5, 19.5, n)],
+                             rng.uniform(0, 5, 2 * n), rng.uniform(0, 5, 2 * n)])  # fmt: skip
+        v = rng.standard_normal((2 * n, 3))
+        for sl, T, u in ((slice(0, n), 1.0, 0.3), (slice(n, 2 * n), 3.0, -0.2)):
+            v[sl] -= v[sl].mean(axis=0)
+            v[sl] *= np.sqrt(T * 3 * (n - 1) / np.sum(v[sl] ** 2))
+            v[sl, 0] += u
+        self.state = MDState(x=x, v=v, L=np.array([20.0, 5.0, 5.0]),
+                             periodic=np.array([False, True, True]),
+                             walls0=np.array([0.0, 0.0, 20.0, 0.0]))  # fmt: skip
+        self.n = n
+
+    def wall_positions(self) -> tuple[float, float]:
+        return 0.0, 20.0
+
+
+def _slab_T(v: np.ndarray) -> float:
+    return float(np.sum((v - v.mean(axis=0)) ** 2) / (3 * (v.shape[0] - 1)))
+
+
+def test_local_thermostat_moves_each_slab_towards_T0_and_keeps_its_momentum():
+    """``flatten_temperature`` (Berendsen weak coupling per slab): with Δt/τ_l = 1 each slab
+    lands on T0 exactly (λ² = T0/T_b); with Δt/τ_l = 0.1 the gap T_b − T0 shrinks to
+    T0 + 0.9 (T_b − T0) (λ² T_b); every slab's momentum is unchanged (rounding)."""
+    from hugomap.md.sample import LOCAL_TAU, flatten_temperature
+
+    for frac, expect in ((1.0, (2.0, 2.0)), (0.1, (2.0 - 0.9, 2.0 + 0.9))):
+        s = _Slabs()
+        p0 = [s.state.v[:s.n].sum(axis=0), s.state.v[s.n:].sum(axis=0)]  # fmt: skip
+        flatten_temperature(s, 2.0, frac * LOCAL_TAU)
+        for k, sl in enumerate((slice(0, s.n), slice(s.n, 2 * s.n))):
+            assert _slab_T(s.state.v[sl]) == pytest.approx(expect[k], rel=1e-12)
+            np.testing.assert_allclose(s.state.v[sl].sum(axis=0), p0[k], atol=1e-10)

@@ -161,7 +161,8 @@ class MDBackend:
     # -- sample and checkpoints ------------------------------------------------------------
     def prepare(self, scene: dict) -> tuple[Any, Pole, dict[str, Any]]:
         """FCC at (ρ0, T0) (or the atoms of ``sample.data_file``, a LAMMPS data file) between
-        two static walls, thermostatted (CSVR) for ``equilibrate_time`` while
+        two static walls, thermostatted (CSVR, and slab by slab along x:
+        ``md.sample.flatten_temperature``) for ``equilibrate_time`` while
         ``md.sample.size_bulk`` sizes the box so that the bulk, ``WALL_LAYER`` from the walls,
         is at ρ0 (a fluid: L_x = cells·a less the walls' excess layer, about 0.2 % for the
         default liquid; a crystal keeps its lattice) and ends at the canonical mean energy of
