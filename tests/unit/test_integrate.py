@@ -346,6 +346,7 @@ class _Slabs:
                              periodic=np.array([False, True, True]),
                              walls0=np.array([0.0, 0.0, 20.0, 0.0]))  # fmt: skip
         self.n = n
+        self.tau_bath = 0.5
 
     def wall_positions(self) -> tuple[float, float]:
         return 0.0, 20.0
@@ -356,15 +357,15 @@ def _slab_T(v: np.ndarray) -> float:
 
 
 def test_local_thermostat_moves_each_slab_towards_T0_and_keeps_its_momentum():
-    """``flatten_temperature`` (Berendsen weak coupling per slab): with Δt/τ_l = 1 each slab
-    lands on T0 exactly (λ² = T0/T_b); with Δt/τ_l = 0.1 the gap T_b − T0 shrinks to
+    """``flatten_temperature`` (Berendsen weak coupling per slab): with Δt/τ = 1 each slab
+    lands on T0 exactly (λ² = T0/T_b); with Δt/τ = 0.1 the gap T_b − T0 shrinks to
     T0 + 0.9 (T_b − T0) (λ² T_b); every slab's momentum is unchanged (rounding)."""
-    from hugomap.md.sample import LOCAL_TAU, flatten_temperature
+    from hugomap.md.sample import flatten_temperature
 
     for frac, expect in ((1.0, (2.0, 2.0)), (0.1, (2.0 - 0.9, 2.0 + 0.9))):
         s = _Slabs()
         p0 = [s.state.v[:s.n].sum(axis=0), s.state.v[s.n:].sum(axis=0)]  # fmt: skip
-        flatten_temperature(s, 2.0, frac * LOCAL_TAU)
+        flatten_temperature(s, 2.0, frac * s.tau_bath, 10.0, 1.0)
         for k, sl in enumerate((slice(0, s.n), slice(s.n, 2 * s.n))):
             assert _slab_T(s.state.v[sl]) == pytest.approx(expect[k], rel=1e-12)
             np.testing.assert_allclose(s.state.v[sl].sum(axis=0), p0[k], atol=1e-10)

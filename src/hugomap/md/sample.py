@@ -121,25 +121,29 @@ def bulk_density(sim: MDSimulation, layer: float) -> float:
     return n / (float(sim.state.L[1] * sim.state.L[2]) * (hi - lo))
 
 
-#: The local thermostat of the equilibration (``flatten_temperature``): slabs [σ] along x,
-#: their time constant [τ], and the steps between two of its rescalings.
-LOCAL_SLAB = 10.0
-LOCAL_TAU = 0.5
+#: The local thermostat of the equilibration (``flatten_temperature``): its slabs are this
+#: many wall layers wide (10 σ for the LJ scenes' 4-σ layer), its time constant the global
+#: thermostat's, and it acts every ``LOCAL_EVERY`` steps.
+LOCAL_SLAB_LAYERS = 2.5
 LOCAL_EVERY = 25
 
 
-def flatten_temperature(sim: MDSimulation, T0: float, dt_since: float) -> None:
+def flatten_temperature(
+    sim: MDSimulation, kT0: float, dt_since: float, width: float, kinetic: float
+) -> None:
     """One step of a local weak-coupling thermostat along x: the mobile atoms are sorted into
-    slabs of ``LOCAL_SLAB`` σ from the left wall, and in each slab b the velocities relative
-    to the slab's mean u_b are scaled towards T0 [ε/k_B],
+    slabs ``width`` wide from the left wall, and in each slab b the velocities relative to
+    the slab's mean u_b are scaled towards k_B T0 = ``kT0``,
 
-        v_i ← u_b + λ_b (v_i − u_b),   λ_b² = 1 + (Δt/τ_l)(T0/T_b − 1),
-        T_b = Σ_b (v_i − u_b)² / (3 (n_b − 1)),
+        v_i ← u_b + λ_b (v_i − u_b),   λ_b² = 1 + (Δt/τ)(k_B T0/k_B T_b − 1),
+        k_B T_b = c Σ_b (v_i − u_b)² / (3 (n_b − 1)),
 
-    (Berendsen et al., J. Chem. Phys. 81, 3684 (1984), slab by slab), Δt = ``dt_since`` [τ]
-    since the last call, τ_l = ``LOCAL_TAU``. Each slab keeps its momentum. Why: the global
-    CSVR thermostat holds the whole sample's kinetic energy only, and the atoms that gather
-    into the walls' dense contact layers while the liquid melts and settles release energy
+    (Berendsen et al., J. Chem. Phys. 81, 3684 (1984), slab by slab), Δt = ``dt_since``
+    since the last call, τ the simulation's thermostat time constant (``tau_bath``),
+    c = ``kinetic`` the energy of a unit velocity squared, m·mvv2e (1 in LJ units); all in
+    the simulation's own units. Each slab keeps its momentum. Why: the global CSVR
+    thermostat holds the whole sample's kinetic energy only, and the atoms that gather into
+    the walls' dense contact layers while the liquid melts and settles release energy
     there, which it removes from everywhere. Measured on the default liquid (410 σ between
     the walls, seed 1, 2 τ of NVE after the preparation): 2.03-2.15 within 24 σ of either
     wall, 1.94-1.98 at 40-100 σ, 2.00 in the middle, for T0 = 2; heat crosses 40 σ of the
@@ -149,7 +153,7 @@ def flatten_temperature(sim: MDSimulation, T0: float, dt_since: float) -> None:
     s = sim.state
     m = s.ids >= 0  # mobile atoms (frozen ones carry negative labels)
     xl, _ = sim.wall_positions()
-    b = np.maximum(((s.x[m, 0] - xl) // LOCAL_SLAB).astype(np.int64), 0)
+    b = np.maximum(((s.x[m, 0] - xl) // width).astype(np.int64), 0)
     nb = int(b.max()) + 1 if b.size else 0
     n = np.bincount(b, minlength=nb).astype(float)
     v_all = np.array(s.v, dtype=float)  # a copy, assigned back (a LAMMPS state on ranks)
@@ -157,15 +161,21 @@ def flatten_temperature(sim: MDSimulation, T0: float, dt_since: float) -> None:
     u = np.stack([np.bincount(b, weights=v[:, d], minlength=nb) for d in range(3)], axis=1)
     u /= np.maximum(n, 1.0)[:, None]
     dv = v - u[b]
-    T = np.bincount(b, weights=np.sum(dv * dv, axis=1), minlength=nb)
-    T /= np.maximum(3.0 * (n - 1.0), 1.0)
-    lam2 = np.where(T > 0.0, 1.0 + dt_since / LOCAL_TAU * (T0 / np.where(T > 0.0, T, 1.0) - 1.0),
-                    1.0)  # fmt: skip
+    kT = kinetic * np.bincount(b, weights=np.sum(dv * dv, axis=1), minlength=nb)
+    kT /= np.maximum(3.0 * (n - 1.0), 1.0)
+    ratio = kT0 / np.where(kT > 0.0, kT, kT0)
+    lam2 = 1.0 + dt_since / float(sim.tau_bath) * (ratio - 1.0)
     v_all[m] = u[b] + np.sqrt(np.clip(lam2, 0.25, 4.0))[b][:, None] * dv
     s.v = v_all
 
 
-def _advance_nvt(sim: MDSimulation, n_steps: int, T0: float) -> None:
+def _kinetic_unit(sim: MDSimulation) -> float:
+    """m·mvv2e: the kinetic energy of the mobile atoms over ½ Σ v² (1 in LJ units)."""
+    v = np.asarray(sim.state.v)[np.asarray(sim.state.ids) >= 0]
+    return 2.0 * sim.energies()[0] / float(np.sum(v * v))
+
+
+def _advance_nvt(sim: MDSimulation, n_steps: int, kT0: float, width: float, kin: float) -> None:
     """``n_steps`` with the simulation's (global) thermostat and the local one
     (``flatten_temperature`` every ``LOCAL_EVERY`` steps)."""
     done = 0
@@ -173,20 +183,20 @@ def _advance_nvt(sim: MDSimulation, n_steps: int, T0: float) -> None:
         k = min(LOCAL_EVERY, n_steps - done)
         sim.advance(k)
         done += k
-        flatten_temperature(sim, T0, k * sim.dt)
+        flatten_temperature(sim, kT0, k * sim.dt, width, kin)
 
 
 def _measure_nvt(
-    sim: MDSimulation, n_steps: int, every: int, layer: float, T0: float
+    sim: MDSimulation, n_steps: int, every: int, layer: float, local: tuple[float, float, float]
 ) -> np.ndarray:
-    """Run ``n_steps`` (thermostats as ``_advance_nvt``), sampling every ``every`` steps
-    the bulk density ρ_b [σ⁻³], the kinetic and the potential energy K, U [ε]; returns the
-    series as rows (ρ_b, K, U)."""
+    """Run ``n_steps`` (thermostats as ``_advance_nvt``, ``local`` its k_B T0, width and c),
+    sampling every ``every`` steps the bulk density ρ_b [σ⁻³], the kinetic and the potential
+    energy K, U [ε]; returns the series as rows (ρ_b, K, U)."""
     rows = []
     done = 0
     while done < n_steps:
         k = min(every, n_steps - done)
-        _advance_nvt(sim, k, T0)
+        _advance_nvt(sim, k, *local)
         done += k
         rows.append((bulk_density(sim, layer), *sim.energies()))
     return np.asarray(rows)
@@ -235,16 +245,17 @@ def size_bulk(
     f[1], f[3] = max(f[1], 1), max(f[3], 1)  # a short run still measures once
     info: dict[str, float] = {"length_x_nominal": float(sim.state.L[0])}
     dU = 0.0
+    local = (T0, LOCAL_SLAB_LAYERS * layer, _kinetic_unit(sim))
     if resize:
-        _advance_nvt(sim, f[0], T0)
-        first = _measure_nvt(sim, f[1], every, layer, T0)
+        _advance_nvt(sim, f[0], *local)
+        first = _measure_nvt(sim, f[1], every, layer, local)
         L1 = float(sim.state.L[0]) * float(first[:, 0].mean()) / rho0
         sim.scale_x(L1 / float(sim.state.L[0]))
-        _advance_nvt(sim, f[2], T0)
+        _advance_nvt(sim, f[2], *local)
         info["rho_bulk_first"] = float(first[:, 0].mean())
     else:
-        _advance_nvt(sim, n_steps - f[3], T0)
-    last = _measure_nvt(sim, f[3], every, layer, T0)
+        _advance_nvt(sim, n_steps - f[3], *local)
+    last = _measure_nvt(sim, f[3], every, layer, local)
     if resize:
         L2 = float(sim.state.L[0]) * float(last[:, 0].mean()) / rho0
         L_star = (f[1] * L1 + f[3] * L2) / (f[1] + f[3])
