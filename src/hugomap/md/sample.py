@@ -177,13 +177,14 @@ def _kinetic_unit(sim: MDSimulation) -> float:
 
 def _advance_nvt(sim: MDSimulation, n_steps: int, kT0: float, width: float, kin: float) -> None:
     """``n_steps`` with the simulation's (global) thermostat and the local one
-    (``flatten_temperature`` every ``LOCAL_EVERY`` steps)."""
+    (``flatten_temperature`` every ``LOCAL_EVERY`` steps; none when ``kin`` is 0)."""
     done = 0
     while done < n_steps:
         k = min(LOCAL_EVERY, n_steps - done)
         sim.advance(k)
         done += k
-        flatten_temperature(sim, kT0, k * sim.dt, width, kin)
+        if kin > 0.0:
+            flatten_temperature(sim, kT0, k * sim.dt, width, kin)
 
 
 def _measure_nvt(
@@ -204,11 +205,13 @@ def _measure_nvt(
 
 def size_bulk(
     sim: MDSimulation, rho0: float, T0: float, n_steps: int, layer: float, resize: bool,
-    every: int = 25,
+    every: int = 25, local: bool = True,
 ) -> dict[str, float]:  # fmt: skip
     """Equilibrate a sample between two static walls for ``n_steps`` steps with its
-    thermostats on (the simulation's global CSVR, and the local ``flatten_temperature``), sizing its box so that its bulk has density ``rho0`` [σ⁻³], and end at
-    the canonical mean energy of ``T0`` [ε/k_B]. Returns what it did and measured.
+    thermostats on (the simulation's global CSVR, and with ``local`` the slab-by-slab
+    ``flatten_temperature``), sizing its box so that its bulk has density ``rho0`` [σ⁻³],
+    and end at the canonical mean energy of ``T0`` [ε/k_B]. Returns what it did and
+    measured.
 
     Box (``resize``, a fluid). A wall's contact layer is denser than the bulk (for a hard
     wall the contact density is P/k_BT, Henderson, Abraham & Barker, Mol. Phys. 31, 1291
@@ -245,7 +248,7 @@ def size_bulk(
     f[1], f[3] = max(f[1], 1), max(f[3], 1)  # a short run still measures once
     info: dict[str, float] = {"length_x_nominal": float(sim.state.L[0])}
     dU = 0.0
-    local = (T0, LOCAL_SLAB_LAYERS * layer, _kinetic_unit(sim))
+    local = (T0, LOCAL_SLAB_LAYERS * layer, _kinetic_unit(sim) if local else 0.0)
     if resize:
         _advance_nvt(sim, f[0], *local)
         first = _measure_nvt(sim, f[1], every, layer, local)
