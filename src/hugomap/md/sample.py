@@ -178,26 +178,28 @@ def _kinetic_unit(sim: MDSimulation) -> float:
 def _advance_nvt(sim: MDSimulation, n_steps: int, kT0: float, width: float, kin: float) -> None:
     """``n_steps`` with the simulation's (global) thermostat and the local one
     (``flatten_temperature`` every ``LOCAL_EVERY`` steps; none when ``kin`` is 0)."""
+    if not kin > 0.0:
+        sim.advance(n_steps)  # in one go: a LAMMPS run per call costs a setup
+        return
     done = 0
     while done < n_steps:
         k = min(LOCAL_EVERY, n_steps - done)
         sim.advance(k)
         done += k
-        if kin > 0.0:
-            flatten_temperature(sim, kT0, k * sim.dt, width, kin)
+        flatten_temperature(sim, kT0, k * sim.dt, width, kin)
 
 
 def _measure_nvt(
-    sim: MDSimulation, n_steps: int, every: int, layer: float, local: tuple[float, float, float]
+    sim: MDSimulation, n_steps: int, every: int, layer: float, bath: tuple[float, float, float]
 ) -> np.ndarray:
-    """Run ``n_steps`` (thermostats as ``_advance_nvt``, ``local`` its k_B T0, width and c),
+    """Run ``n_steps`` (thermostats as ``_advance_nvt``, ``bath`` its k_B T0, width and c),
     sampling every ``every`` steps the bulk density ρ_b [σ⁻³], the kinetic and the potential
     energy K, U [ε]; returns the series as rows (ρ_b, K, U)."""
     rows = []
     done = 0
     while done < n_steps:
         k = min(every, n_steps - done)
-        _advance_nvt(sim, k, *local)
+        _advance_nvt(sim, k, *bath)
         done += k
         rows.append((bulk_density(sim, layer), *sim.energies()))
     return np.asarray(rows)
@@ -248,17 +250,17 @@ def size_bulk(
     f[1], f[3] = max(f[1], 1), max(f[3], 1)  # a short run still measures once
     info: dict[str, float] = {"length_x_nominal": float(sim.state.L[0])}
     dU = 0.0
-    local = (T0, LOCAL_SLAB_LAYERS * layer, _kinetic_unit(sim) if local else 0.0)
+    bath = (T0, LOCAL_SLAB_LAYERS * layer, _kinetic_unit(sim) if local else 0.0)
     if resize:
-        _advance_nvt(sim, f[0], *local)
-        first = _measure_nvt(sim, f[1], every, layer, local)
+        _advance_nvt(sim, f[0], *bath)
+        first = _measure_nvt(sim, f[1], every, layer, bath)
         L1 = float(sim.state.L[0]) * float(first[:, 0].mean()) / rho0
         sim.scale_x(L1 / float(sim.state.L[0]))
-        _advance_nvt(sim, f[2], *local)
+        _advance_nvt(sim, f[2], *bath)
         info["rho_bulk_first"] = float(first[:, 0].mean())
     else:
-        _advance_nvt(sim, n_steps - f[3], *local)
-    last = _measure_nvt(sim, f[3], every, layer, local)
+        _advance_nvt(sim, n_steps - f[3], *bath)
+    last = _measure_nvt(sim, f[3], every, layer, bath)
     if resize:
         L2 = float(sim.state.L[0]) * float(last[:, 0].mean()) / rho0
         L_star = (f[1] * L1 + f[3] * L2) / (f[1] + f[3])
