@@ -245,10 +245,8 @@ class LammpsBackend:
             info["langevin"] = {"damp": damp, "steps": float(n_eq)}
             n_eq = max(n_eq // 2, 1)  # then CSVR, to end at the canonical energy (size_bulk)
         if n_eq > 0:
-            # size_bulk's "T0" is k_B T0 in the energy unit of sim.energies() (lj: T0). The
-            # local thermostat is the numba backend's alone for now: with it, this
-            # backend's LJ test box (tests/lammps/test_lammps_piston.py, seeds 1 and 2) gave
-            # energy residuals of -3.2 +- 0.8 and -3.4 +- 2.0 %, not yet understood
+            # "T0" is k_B T0 in sim.energies()'s unit (lj: T0). No local thermostat yet: with it
+            # this backend's LJ test box gave energy residuals near -3 %, not understood
             info.update(size_bulk(sim, s["rho0"], us.k_B * s["T0"], n_eq, layer,
                                   resize=scene["phase"] != "crystal", local=False))  # fmt: skip
             info["T_nvt"] = info["T_nvt"] / us.k_B  # [ε/k_B | K]
