@@ -86,11 +86,13 @@ class _ToyProfile:
         return SlabState(rho=m[2], u=m[1], P=m[3], Pyy=m[3], Pzz=m[3], E=m[4])
 
 
-def _toy_run(P_bias: float, noise: float, wander: float = 0.0, seed: int = 3, flow: float = 0.0):
+def _toy_run(P_bias: float, noise: float, wander: float = 0.0, seed: int = 3, flow: float = 0.0,
+             ahead: tuple[float, float, float, float] = (0.0, 1.0, 1.0, 0.0)):  # fmt: skip
     """Samples of a steady front at D into the pole (ρ0 1, P0 1, E0 0) at rest, u_p 1, the
     state behind exact except P × (1 + P_bias), every field with white noise of relative
     size ``noise``; the front position may wander by ``wander`` (one sine over the run); the
-    slab behind may flow at ``flow`` relative to the boundary behind it (u = u_p + flow)."""
+    slab behind may flow at ``flow`` relative to the boundary behind it (u = u_p + flow);
+    the material ahead is at (u, ρ, P, E) = ``ahead`` (default the pole at rest)."""
     from hugomap.states import Pole
 
     rng = np.random.default_rng(seed)
@@ -102,7 +104,7 @@ def _toy_run(P_bias: float, noise: float, wander: float = 0.0, seed: int = 3, fl
     sums = np.empty((t.size, 100, 5))
     for i, x in enumerate(xf):
         behind = (edges[1:] <= x)[:, None]
-        ahead_state = np.array([30.0, 0.0, 1.0, 1.0, 0.0])
+        ahead_state = np.array([30.0, *ahead])
         behind_state = np.array([30.0, u_p + flow, rho, P * (1 + P_bias), E])
         s = np.where(behind, behind_state, ahead_state)
         s[:, 2:] *= 1 + noise * rng.standard_normal((100, 3))
@@ -241,6 +243,28 @@ def test_a_disturbed_state_ahead_is_named_unless_two_wave():
     quiet = {**v, "ahead_P_err": 0.2, "ahead_u_err": 0.03}
     assert named_causes(quiet, 0.01, pole=pole) == []
     assert named_causes(v, 0.03, pole=pole) == []
+
+
+def test_two_waves_need_a_precursor_compressed_in_the_sense_of_the_main_jump():
+    """The state ahead off the pole in P by 10 % of the main jump (P − P0 = 3 here), far beyond
+    its noise, the state behind the exact jump from the pole: compressed (P +0.3, ρ +0.3 %,
+    moving +0.01), it is a precursor and the jump is taken from it (``two_wave``; the
+    residuals then show the mismatch); rarefied by as much (as a disturbed inflow can leave
+    it: the MD window's material ahead once came out 0.5 % rarefied, P 4 % of the jump
+    low), it is not: the jump is taken from the pole (residuals ~0 here) and the state ahead
+    is named as off the pole."""
+    from hugomap.analysis.shock import measure_point, named_causes
+
+    for sign, two_wave in ((+1, 1.0), (-1, 0.0)):
+        d = sign * 0.3
+        h, pole = _toy_run(0.0, 0.0005, ahead=(0.01 * sign, 1.0 + 0.01 * d, 1.0 + d, 0.0))
+        r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                          residual_tol=0.01)  # fmt: skip
+        assert r["two_wave"] == two_wave, (sign, r["ahead_P"])
+        off = abs(r["residual_momentum"]) > 0.05  # the jump from the precursor, not the pole
+        assert off == bool(two_wave), r["residual_momentum"]
+        causes = " ".join(named_causes({**r, "u_p": 1.0}, 0.01, pole=pole))
+        assert ("state ahead off the pole" in causes) == (not two_wave), causes
 
 
 def test_a_run_without_any_slab_is_too_few_samples_not_an_error():
