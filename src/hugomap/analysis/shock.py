@@ -389,9 +389,9 @@ def measure_point(
     ``TWO_WAVE_SIGMAS`` of its error and ``TWO_WAVE_FRACTION`` of P − P0, in the sense of
     P − P0 (an elastic precursor compresses), ``two_wave`` = 1 and the jump conditions are
     taken from that state instead of the pole. Residuals (``jump_residuals``) with
-    first-order propagated errors (``jump_residual_errors``), and a fourth, the slab's flow: ``residual_flow`` =
-    (u_p_measured − u_p)/u_p ± σ(u_p_measured)/u_p (a steady shocked state is at rest
-    relative to the boundary that holds it). Status: ``ok`` when D, u_p, ρ, P, E are finite,
+    first-order propagated errors (``jump_residual_errors``), and a fourth, the slab's flow:
+    ``residual_flow`` = (u_p_measured − u_p)/u_p ± σ(u_p_measured)/u_p (a steady shocked
+    state is at rest relative to the boundary that holds it). Status: ``ok`` when D, u_p, ρ, P, E are finite,
     at least max(2 n_blocks, half the samples) have a slab behind the front and all four
     close: |r| ≤ ``residual_tol`` and |r| ≤ ``CLOSE_SIGMAS`` of its error (a residual of
     0.8 % with an error of 0.1 % is a bias, not noise) or ≤ ``RESIDUAL_FLOOR``;
@@ -509,10 +509,11 @@ def measure_point(
     dP_ahead_err = float(np.hypot(out["ahead_P_err"], P0_err))
     # a precursor compresses in the main jump's sense; material ahead rarefied (a disturbed
     # inflow) is off the pole, not a first wave, and is named as such (``named_causes``)
+    lead = dP_ahead * np.sign(P - P0)  # the state ahead's jump, positive if it compresses
     two_wave = bool(
-        np.isfinite(dP_ahead)
-        and dP_ahead * np.sign(P - P0) > TWO_WAVE_SIGMAS * dP_ahead_err
-        and dP_ahead * np.sign(P - P0) > TWO_WAVE_FRACTION * abs(P - P0)
+        np.isfinite(lead)
+        and lead > TWO_WAVE_SIGMAS * dP_ahead_err
+        and lead > TWO_WAVE_FRACTION * abs(P - P0)
     )
     out["two_wave"] = float(two_wave)
     vals = {"D": D, "u": u_p, "rho": rho, "P": P, "E": E}
