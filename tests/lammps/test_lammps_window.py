@@ -249,3 +249,30 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
     assert back.sim.kit.units == ("angstrom", "angstrom ps-1")
     # the pole of the inflow, native: number density of the lattice, T near 300 K
     assert pole["rho0"] == pytest.approx(sc["sample"]["rho0"]) and 200 < pole["T0"] < 400
+
+
+def test_the_inflow_screen_runs_on_lammps_as_on_the_numba_md() -> None:
+    """``md.window.inflow_drift`` through ``LammpsKit``: one snapshot, made by LAMMPS, fed as
+    a uniform flow (V = 10.7 σ/τ) through a 14-σ window by LAMMPS and by the numba MD (the
+    same truncated-and-shifted LJ, velocity Verlet at the same dt). Measured: −0.0489 ±
+    0.043 σ/τ by both, equal to 1e-5 over these 6.4 τ (the two integrations stay together);
+    the bound asks only the statistical agreement, 3 of their combined block errors
+    (0.04 σ/τ each on this 6.8-σ-wide box over 4 τ), which holds where round-off has let
+    them part. A unit slip (a kit that took Å for σ, or ps for τ) or a sign error in the
+    window frame would put them apart by O(V)."""
+    from hugomap.lammps.window import LammpsKit
+    from hugomap.md.kit import MDKit
+    from hugomap.md.potential import LJParams
+    from hugomap.md.window import InflowScreen, inflow_drift, make_reservoir
+
+    kit = LammpsKit(_scene()["model"])
+    res, _ = make_reservoir((4, 4), 0.8, 2.0, None, DT, 5, 0.3, n_candidates=4, every=10,
+                            pole_time=0.5, kit=kit)  # fmt: skip
+    screen = InflowScreen(10.7, 14.0, 3.0, 2.0, 25, 4.0, 1, 0.001)
+    du_l, err_l = inflow_drift(kit, res, screen)
+    md = MDKit(LJParams(rc=2.5, shift=True, skin=0.3))
+    x, v = res.state.x.copy(), res.state.v.copy()
+    du_m, err_m = inflow_drift(md, md.periodic(x, v, res.state.L.copy(), DT), screen)
+    res.close()
+    assert 0 < err_l < 0.05 and 0 < err_m < 0.05, (err_l, err_m)
+    assert abs(du_l - du_m) < 3.0 * np.hypot(err_l, err_m), (du_l, err_l, du_m, err_m)

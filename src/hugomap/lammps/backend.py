@@ -341,14 +341,15 @@ class LammpsBackend:
     ) -> WindowStart:  # fmt: skip
         """The MD backend's window (``MDBackend.open_window``) on LAMMPS: a reservoir made
         by LAMMPS with the scene's model (``md.window.make_reservoir`` through
-        ``window.LammpsKit``; a fluid's at the sample's measured (ρ0, E0), so window and
+        ``window.LammpsKit``; a fluid's at the sample's measured (ρ0, E0), its snapshot
+        screened by the flow it feeds in (``window.reservoir_screen``), so window and
         piston points share one pole, a crystal's at the lattice's ρ0 and T0, its pole the
         inflow's), ``MDWindow.from_piston`` with the front at ``window.front_fraction``,
         ``settle_time`` at the guessed D, then ω normalised by the pole and the shocked slab
         between the outflow edge and the front (``shock.gap`` clear of both). ``front``,
         ``u_p``, ``D_guess`` arrive in the frame's units (metal: SI) and are converted to
         the simulation's; the returned window, pole and ω are in the frame's."""
-        from ..md.window import MDWindow, make_reservoir
+        from ..md.window import MDWindow, inflow_screen, make_reservoir
         from ..window.methods import OmegaSignal
         from .simulation import native
         from .window import LammpsKit
@@ -362,6 +363,7 @@ class LammpsBackend:
             (s["cells"][1], s["cells"][2]), rho_n if fluid else s["rho0"], s["T0"], None,
             sim.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"], s["thermostat_tau"],
             E0_target=e_n if fluid else None, kit=kit, min_length=w["reservoir_length"],
+            screen=inflow_screen(w, self._native_velocity(D_guess)) if fluid else None,
         )  # fmt: skip
         inflow = self._pole_from_native(scene, inflow)
         log.info("inflow pole: %s", json.dumps(inflow))

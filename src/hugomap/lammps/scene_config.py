@@ -48,6 +48,7 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
                    "reservoir_equilibrate_time": 3.0, "reservoir_length": 40.0,
                    "settle_time": 10.0, "window_time": 2.0, "average_time": 10.0},
         "window.dichotomy": {"half_width": 0.4, "tolerance": 0.02},
+        "window.reservoir_screen": {"average_time": 12.0},
         # shock-frame schemes (lammps.shockframe), measured on the LJ liquid (rho0 0.8, T0 2,
         # u_p = 2): nphug at Pdamp 1 tau settles within ~3 tau; MSST with q = 1, mu = 30
         # compresses from the pole within ~7 tau; E - E0 fluctuates by 1.1 % over 6 tau
@@ -70,6 +71,7 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
                    "reservoir_equilibrate_time": 1.0, "reservoir_length": 0.0,
                    "settle_time": 2.0, "window_time": 2.0, "average_time": 3.0},
         "window.dichotomy": {"half_width": 200.0, "tolerance": 10.0},
+        "window.reservoir_screen": {"average_time": 2.0},
         # shock-frame schemes: times of a few sound transits of the ~30 A box. MSST on copper
         # (Cu_mishin1, 1000 m/s): mu 3000 with tscale 0 left the cell at its pole for 2.5 ps
         # and then oscillating; mu 300 with a 1 % kick of the kinetic energy into the cell

@@ -92,11 +92,13 @@ def specific_energy_factor(mass: float, units: UnitSystem = METAL) -> float:
 
 def si_pole(pole: dict[str, float], mass: float, units: UnitSystem = METAL) -> dict[str, float]:
     """A pole measured in native units (ρ0 [length⁻³], P0, Pyy0 [energy/length³], E0
-    [energy per atom], T0 [K]; each with ``_err``) in SI: ρ0 [kg/m³], P0, Pyy0 [Pa], E0
-    [J/kg], T0 [K] (``number_density_factor``, ``pressure_Pa``,
-    ``specific_energy_factor``)."""
+    [energy per atom], T0 [K]; each with ``_err``; an inflow's screened flow du [velocity]
+    and its count ``screened``) in SI: ρ0 [kg/m³], P0, Pyy0 [Pa], E0 [J/kg], T0 [K], du
+    [m/s] (``number_density_factor``, ``pressure_Pa``, ``specific_energy_factor``,
+    ``velocity_m_s``)."""
     factor = {"rho0": number_density_factor(mass, units), "P0": units.pressure_Pa,
-              "Pyy0": units.pressure_Pa, "E0": specific_energy_factor(mass, units), "T0": 1.0}  # fmt: skip
+              "Pyy0": units.pressure_Pa, "E0": specific_energy_factor(mass, units), "T0": 1.0,
+              "du": units.velocity_m_s, "screened": 1.0}  # fmt: skip
     out = {}
     for key, value in pole.items():
         out[key] = float(value) * factor[key.removesuffix("_err")]

@@ -266,7 +266,8 @@ class MDBackend:
     ) -> WindowStart:  # fmt: skip
         """``MDWindow.from_piston`` with the front at ``window.front_fraction``, its inflow a
         reservoir snapshot. A fluid's inflow is made at the piston sample's measured
-        (ρ0, E0), so both schemes share one pole (the sample's more precise P0, T0 are kept;
+        (ρ0, E0), its snapshot screened by the flow it feeds in at D_guess
+        (``window.reservoir_screen``, ``inflow_screen``), so both schemes share one pole (the sample's more precise P0, T0 are kept;
         the inflow's own measurement, a ~1000-atom box over 2 τ, is stored beside them as a
         check); a crystal's keeps the nominal lattice (the seam needs its registry) and T0,
         and its pole is the inflow's. The window runs ``settle_time`` at the guessed D (the
@@ -274,7 +275,7 @@ class MDBackend:
         (ρ0, P0) and the shocked slab between the outflow edge and the front (``shock.gap``
         clear of both)."""
         from ..window.methods import OmegaSignal
-        from .window import MDWindow, make_reservoir
+        from .window import MDWindow, inflow_screen, make_reservoir
 
         w, sh, s = scene["window"], scene["shock"], scene["sample"]
         fluid = scene["phase"] != "crystal"
@@ -283,6 +284,7 @@ class MDBackend:
             solver.lj, solver.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"],
             s["thermostat_tau"], E0_target=pole.E0 if fluid else None,
             min_length=w["reservoir_length"],
+            screen=inflow_screen(w, D_guess) if fluid else None,
         )  # fmt: skip
         log.info("inflow pole: %s", json.dumps(inflow))
         win = MDWindow.from_piston(
