@@ -267,6 +267,23 @@ def test_two_waves_need_a_precursor_compressed_in_the_sense_of_the_main_jump():
         assert ("state ahead off the pole" in causes) == (not two_wave), causes
 
 
+def test_a_point_whose_state_ahead_is_off_the_pole_is_not_ok():
+    """The state behind the exact jump from the pole (its residuals from the pole ~0), the
+    material ahead moving at δu: at δu = 0.02 (2 % of u_p = 1, far beyond its noise) the
+    jump from what is actually ahead is 2 % off in momentum, so the point is not ok and says
+    why (``ahead_off_pole``); at δu = 0.005 (0.5 %, inside residual_tol = 1 %) it is ok."""
+    from hugomap.analysis.shock import measure_point
+
+    for du, status in ((0.02, "not_converged"), (0.005, "ok")):
+        h, pole = _toy_run(0.0, 0.0005, ahead=(du, 1.0, 1.0, 0.0))
+        r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                          residual_tol=0.01)  # fmt: skip
+        assert abs(r["residual_momentum"]) < 0.002, r["residual_momentum"]
+        assert r["status"] == status, (du, r["status"], r["diagnostic"])
+        assert r["ahead_off_pole"] == float(status != "ok")
+        assert ("state ahead off the pole" in r["diagnostic"]) == (status != "ok")
+
+
 def test_a_run_without_any_slab_is_too_few_samples_not_an_error():
     """A front always nearer the boundaries than gap + the least slab (a window too short for
     its ``shock.gap``): no sample has a slab on either side, and the point is

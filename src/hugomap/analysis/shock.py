@@ -253,6 +253,31 @@ def _closes(r: float, err: float, tol: float) -> bool:
     return bool(abs(r) <= tol and abs(r) <= max(CLOSE_SIGMAS * err, RESIDUAL_FLOOR))
 
 
+def ahead_off_pole(
+    values: dict, residual_tol: float, pole: Pole | None
+) -> tuple[float, str, float] | None:
+    """The state ahead's worst departure from the pole while the jump is taken from the pole
+    (no ``two_wave``), as (fraction of the jump, field, departure), when it is off: its P, u
+    or ρ differs from the pole's by more than ``CLOSE_SIGMAS`` of its error and more than
+    ``residual_tol`` of the jump P − P0, u_p, ρ − ρ0 [-]. Such a departure moves the jump
+    residuals taken from the state ahead as measured by about that fraction (the momentum
+    residual by δu/u_p), so the point does not close from what is actually ahead of it;
+    else None."""
+    if pole is None or values.get("two_wave", 0.0):
+        return None
+    ahead = (("P", values.get("ahead_P", np.nan) - pole.P0, values.get("P", np.nan) - pole.P0),
+             ("u", values.get("ahead_u", np.nan), values.get("u_p", np.nan)),
+             ("rho", values.get("ahead_rho", np.nan) - pole.rho0,
+              values.get("rho", np.nan) - pole.rho0))  # fmt: skip
+    worst = max(
+        ((abs(d / j), k, d) for k, d, j in ahead
+         if np.isfinite(d) and np.isfinite(j) and j != 0
+         and abs(d) > CLOSE_SIGMAS * values.get(f"ahead_{k}_err", np.inf)),
+        default=(0.0, "", 0.0),
+    )  # fmt: skip
+    return worst if worst[0] > residual_tol else None
+
+
 def named_causes(
     values: dict,
     residual_tol: float,
@@ -313,24 +338,15 @@ def named_causes(
             "compacted), so a full-compaction Hugoniot does not describe it and its volume, "
             "hence the energy jump, carries the pores' unevenness"
         )
-    if pole is not None and not values.get("two_wave", 0.0):
-        # the jump is taken from the pole: material ahead off it biases every residual
-        ahead = (("P", values.get("ahead_P", np.nan) - pole.P0, jumps["P"]),
-                 ("u", values.get("ahead_u", np.nan), values.get("u_p", np.nan)),
-                 ("rho", values.get("ahead_rho", np.nan) - pole.rho0, jumps["rho"]))  # fmt: skip
-        worst = max(
-            ((abs(d / j), k, d) for k, d, j in ahead
-             if np.isfinite(d) and np.isfinite(j) and j != 0
-             and abs(d) > CLOSE_SIGMAS * values.get(f"ahead_{k}_err", np.inf)),
-            default=(0.0, "", 0.0),
-        )  # fmt: skip
-        if worst[0] > residual_tol:
-            out.append(
-                f"state ahead off the pole: its {worst[1]} differs by {worst[2]:+.3g} "
-                f"({worst[0]:.2%} of the jump, beyond {CLOSE_SIGMAS:g} errors) while the jump "
-                "is taken from the pole (a precursor below the two-wave threshold, or "
-                "material the inflow or the far end disturbed)"
-            )
+    off = ahead_off_pole(values, residual_tol, pole)
+    if off is not None:
+        frac, key, d = off
+        out.append(
+            f"state ahead off the pole: its {key} differs by {d:+.3g} ({frac:.2%} of the "
+            f"jump, beyond {CLOSE_SIGMAS:g} errors) while the jump is taken from the pole (a "
+            "precursor below the two-wave threshold, or material the inflow or the far end "
+            "disturbed)"
+        )
     return out
 
 
@@ -394,7 +410,10 @@ def measure_point(
     state is at rest relative to the boundary that holds it). Status: ``ok`` when D, u_p, ρ, P, E are finite,
     at least max(2 n_blocks, half the samples) have a slab behind the front and all four
     close: |r| ≤ ``residual_tol`` and |r| ≤ ``CLOSE_SIGMAS`` of its error (a residual of
-    0.8 % with an error of 0.1 % is a bias, not noise) or ≤ ``RESIDUAL_FLOOR``;
+    0.8 % with an error of 0.1 % is a bias, not noise) or ≤ ``RESIDUAL_FLOOR``, and the
+    state ahead is at the pole the jump is taken from (``ahead_off_pole``: off by more than
+    ``CLOSE_SIGMAS`` errors and ``residual_tol`` of the jump, it moves the residuals taken
+    from the state ahead as measured past the tolerance; flag ``ahead_off_pole``);
     ``not_converged`` when one does not; else ``too_few_samples``. ``diagnostic`` says why
     a point is not ok, with the physical causes measured on it (``named_causes``).
     """
@@ -539,7 +558,11 @@ def measure_point(
     out["residual_flow_err"] = float(u_s_err / abs(u_p)) if u_p != 0 else np.nan
     res["flow"], res_err["flow"] = out["residual_flow"], out["residual_flow_err"]
     closes = all(_closes(v, res_err[k], residual_tol) for k, v in res.items())
-    converged = bool(finite and enough and closes)
+    # ok is a jump from what is actually ahead too: a state ahead measurably off the pole
+    # moves the residuals taken from it beyond the tolerance (``ahead_off_pole``)
+    off = ahead_off_pole({**out, "u_p": u_p}, residual_tol, pole)
+    out["ahead_off_pole"] = float(off is not None)
+    converged = bool(finite and enough and closes and off is None)
     out["converged"] = converged
     if not (finite and enough):
         out["status"] = "too_few_samples"
