@@ -268,7 +268,7 @@ def test_the_inflow_screen_runs_on_lammps_as_on_the_numba_md() -> None:
     kit = LammpsKit(_scene()["model"])
     res, _ = make_reservoir((4, 4), 0.8, 2.0, None, DT, 5, 0.3, n_candidates=4, every=10,
                             pole_time=0.5, kit=kit)  # fmt: skip
-    screen = InflowScreen(10.7, 14.0, 3.0, 2.0, 25, 4.0, 1, 0.001)
+    screen = InflowScreen(10.7, 2.0, 9.0, 3.0, 2.0, 25, 4.0, 1, 0.001)
     du_l, err_l = inflow_drift(kit, res, screen)
     md = MDKit(LJParams(rc=2.5, shift=True, skin=0.3))
     x, v = res.state.x.copy(), res.state.v.copy()

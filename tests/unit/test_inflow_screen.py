@@ -38,7 +38,7 @@ def _reservoir(screen, drifts=None, monkeypatch=None):
 
 
 def _screen(candidates: int) -> mdw.InflowScreen:
-    return mdw.InflowScreen(SPEED, 40.0, 3.0, 2.0, 25, 12.0, candidates, 0.001)
+    return mdw.InflowScreen(SPEED, 8.0, 24.0, 3.0, 2.0, 25, 12.0, candidates, 0.001)
 
 
 def test_the_first_candidate_within_tolerance_is_kept(monkeypatch) -> None:
@@ -68,9 +68,13 @@ def test_candidates_are_tried_nearest_the_pole_energy_first(monkeypatch) -> None
 
 
 def test_a_scene_without_candidates_has_no_screen() -> None:
-    w = {"length": 40.0, "ghost_width": 3.0, "cut_every": 2.0, "sync_steps": 25,
+    """The screen samples the window's state-ahead slab: from gap to (1 − front_fraction)
+    L − gap upstream of the inflow seam (``analysis.shock.measure_point``'s ahead slab)."""
+    w = {"length": 100.0, "front_fraction": 0.6, "ghost_width": 3.0, "cut_every": 2.0,
+         "sync_steps": 25,
          "reservoir_screen": {"candidates": 0, "tolerance": 0.001, "average_time": 12.0}}  # fmt: skip
-    assert mdw.inflow_screen(w, SPEED) is None
+    assert mdw.inflow_screen(w, 8.0, SPEED) is None
     w["reservoir_screen"]["candidates"] = 4
-    scr = mdw.inflow_screen(w, 9.5)
-    assert scr is not None and scr.speed == 9.5 and scr.candidates == 4 and scr.length == 40.0
+    scr = mdw.inflow_screen(w, 8.0, 9.5)
+    assert scr is not None and scr.speed == 9.5 and scr.candidates == 4
+    assert (scr.near, scr.far) == (8.0, pytest.approx(32.0))

@@ -363,7 +363,7 @@ class LammpsBackend:
             (s["cells"][1], s["cells"][2]), rho_n if fluid else s["rho0"], s["T0"], None,
             sim.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"], s["thermostat_tau"],
             E0_target=e_n if fluid else None, kit=kit, min_length=w["reservoir_length"],
-            screen=inflow_screen(w, self._native_velocity(D_guess)) if fluid else None,
+            screen=inflow_screen(w, sh["gap"], self._native_velocity(D_guess)) if fluid else None,
         )  # fmt: skip
         inflow = self._pole_from_native(scene, inflow)
         log.info("inflow pole: %s", json.dumps(inflow))

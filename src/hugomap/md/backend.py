@@ -284,7 +284,7 @@ class MDBackend:
             solver.lj, solver.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"],
             s["thermostat_tau"], E0_target=pole.E0 if fluid else None,
             min_length=w["reservoir_length"],
-            screen=inflow_screen(w, D_guess) if fluid else None,
+            screen=inflow_screen(w, sh["gap"], D_guess) if fluid else None,
         )  # fmt: skip
         log.info("inflow pole: %s", json.dumps(inflow))
         win = MDWindow.from_piston(

@@ -228,15 +228,18 @@ def _close(sim) -> None:
 @dataclass(frozen=True)
 class InflowScreen:
     """How ``make_reservoir`` screens its candidate snapshots (``inflow_drift``): a uniform
-    flow of ``speed`` [velocity; the window's expected D] through a window of ``length``
-    [length] (``ghost_width``, ``cut_every``, ``sync_steps`` as the window's), flushed for
-    two transits of window and reservoir, then averaged for ``average_time`` [time];
-    ``candidates`` tried at most; ``tolerance`` [-]: a snapshot is kept when its material
-    flows within ``tolerance``·``speed`` of the inflow (the density it then arrives at is
-    off ρ0 by about that fraction: mass flux ρ (V − δu) = ρ0 V)."""
+    flow of ``speed`` [velocity; the window's expected D] sampled where the window measures
+    the state ahead of its front, from ``near`` to ``far`` [length] upstream of the inflow
+    seam x_hi (``window_ahead``), through a window ``far`` + 5 ``kit.scale`` long
+    (``ghost_width``, ``cut_every``, ``sync_steps`` as the window's), flushed for one transit
+    of window and reservoir, then averaged for ``average_time`` [time]; ``candidates``
+    tried at most; ``tolerance`` [-]: a snapshot is kept when its material flows within
+    ``tolerance``·``speed`` of the inflow (the density it then arrives at is off ρ0 by about
+    that fraction: mass flux ρ (V − δu) = ρ0 V)."""
 
     speed: float
-    length: float
+    near: float
+    far: float
     ghost_width: float
     cut_every: float
     sync_steps: int
@@ -245,14 +248,17 @@ class InflowScreen:
     tolerance: float
 
 
-def inflow_screen(window: dict, speed: float) -> InflowScreen | None:
+def inflow_screen(window: dict, gap: float, speed: float) -> InflowScreen | None:
     """The screen of a scene's ``window`` block (``reservoir_screen``; its geometry the
-    window's) at ``speed`` [velocity], or None where it tries no candidate."""
+    window's) at ``speed`` [velocity], sampling the state ahead's slab of a front at
+    ``front_fraction`` with ``shock.gap`` = ``gap`` [length] (``analysis.shock``: from
+    x_f + gap to x_hi − gap), or None where it tries no candidate."""
     rs = window["reservoir_screen"]
     if rs["candidates"] < 1:
         return None
+    far = (1.0 - float(window["front_fraction"])) * float(window["length"]) - float(gap)
     return InflowScreen(
-        float(speed), float(window["length"]), float(window["ghost_width"]),
+        float(speed), float(gap), max(far, float(gap) + 1.0), float(window["ghost_width"]),
         float(window["cut_every"]), int(window["sync_steps"]), float(rs["average_time"]),
         int(rs["candidates"]), float(rs["tolerance"]),
     )  # fmt: skip
@@ -264,29 +270,32 @@ def inflow_drift(kit, snap, screen: InflowScreen) -> tuple[float, float]:
 
     The window (``MDWindow.from_piston`` with u_p = 0, D_guess = ``screen.speed``) is cut
     from copies of the snapshot itself laid end to end (periodic images: nothing to relax),
-    so u_in = u_out = −V and only the inflow's seams act; after two transits it samples the
-    mobile atoms from 5 past the outflow face to 8 before the inflow seam (``kit.scale``;
-    clear of both boundaries' layers) every ``sync_steps``. Default liquid, V = 10 σ/τ,
-    12 τ averaged: −0.031 to +0.055 σ/τ (± 0.003–0.006) over six seeds' snapshots, against
-    −0.024 to +0.063 σ/τ ahead of AMW's front at u_p = 2 with the same snapshots."""
+    so u_in = u_out = −V and only the inflow's seams act; after one transit it samples the
+    mobile atoms from ``near`` to ``far`` upstream of the inflow seam every ``sync_steps``.
+    The inflow is supersonic (V > c0), so nothing downstream reaches that slab: it sees what
+    a shock window's material ahead of the front sees. What the seam leaves changes with V
+    and along the flow as the disturbed material relaxes (one snapshot, 40-σ window: +0.006,
+    −0.025, +0.056 σ/τ at V = 6, 8, 10), hence the speed and the slab of the window's own
+    measurement."""
     s = snap.state
     Lr = float(s.L[0])
     sc = kit.scale
     wall = 4.0 * sc  # from_piston's default wall layer
-    need = screen.length + screen.ghost_width + 2.0 * wall + 2.0 * sc
+    length = screen.far + 5.0 * sc
+    need = length + screen.ghost_width + 2.0 * wall + 2.0 * sc
     copies = max(2, math.ceil(need / Lr))
     x = np.concatenate([s.x + np.array([i * Lr, 0.0, 0.0]) for i in range(copies)])
     v = np.tile(s.v - s.v.mean(axis=0), (copies, 1))
     L = np.array([copies * Lr, s.L[1], s.L[2]])
     ids = np.arange(x.shape[0], dtype=np.int64)
     flow = kit.domain(snap, x, v, ids, L, np.array([-sc, 0.0, L[0] + sc, 0.0]))
-    front = wall + screen.ghost_width + sc + 0.5 * screen.length
+    front = wall + screen.ghost_width + sc + 0.5 * length
     win = MDWindow.from_piston(
-        flow, snap, front, 0.0, screen.speed, screen.length, 0.5, screen.ghost_width,
+        flow, snap, front, 0.0, screen.speed, length, 0.5, screen.ghost_width,
         screen.cut_every, screen.sync_steps, kit=kit,
     )  # fmt: skip
     _close(flow)
-    flush = (screen.length + Lr) / screen.speed
+    flush = (length + Lr) / screen.speed
     win.advance(int(round(flush / win.dt)))
     g = win.geom
     series = []
@@ -294,7 +303,7 @@ def inflow_drift(kit, snap, screen: InflowScreen) -> tuple[float, float]:
         win.advance(screen.sync_steps)
         st = win.sim.state
         xs = st.x[:, 0]
-        m = (st.ids >= 0) & (xs >= g.x_lo + 5.0 * sc) & (xs < g.x_hi - 8.0 * sc)
+        m = (st.ids >= 0) & (xs >= g.x_hi - screen.far) & (xs < g.x_hi - screen.near)
         series.append(float(st.v[m, 0].mean()) - win.u_in)
     _close(win.sim)
     from ..analysis.stats import block_average
