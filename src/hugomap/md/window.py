@@ -284,7 +284,9 @@ def inflow_drift(kit, snap, screen: InflowScreen) -> tuple[float, float]:
     length = screen.far + 5.0 * sc
     need = length + screen.ghost_width + 2.0 * wall + 2.0 * sc
     copies = max(2, math.ceil(need / Lr))
-    x = np.concatenate([s.x + np.array([i * Lr, 0.0, 0.0]) for i in range(copies)])
+    x0 = s.x.copy()
+    x0[:, 0] %= Lr  # the copies tile [0, copies L_r) exactly, as from_piston lays them
+    x = np.concatenate([x0 + np.array([i * Lr, 0.0, 0.0]) for i in range(copies)])
     v = np.tile(s.v - s.v.mean(axis=0), (copies, 1))
     L = np.array([copies * Lr, s.L[1], s.L[2]])
     ids = np.arange(x.shape[0], dtype=np.int64)
