@@ -65,6 +65,11 @@ POINT_VARS: dict[str, tuple[str, str]] = {
     "ahead_E": ("epsilon", "specific internal energy just ahead of the tracked front"),
     "ahead_u": ("sigma tau^-1", "particle velocity just ahead of the tracked front"),
     "two_wave": ("1", "1 when an elastic precursor runs ahead of the tracked front"),
+    "ahead_off_pole": (
+        "1",
+        "1 when the state ahead is off the pole beyond 3 errors and residual_tol of the jump "
+        "(the point is then not ok)",
+    ),
     "u_p_flow_err": (
         "sigma tau^-1",
         "uncertainty of the jump from the shocked slab's own flow "
