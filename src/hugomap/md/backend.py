@@ -267,9 +267,9 @@ class MDBackend:
         """``MDWindow.from_piston`` with the front at ``window.front_fraction``, its inflow a
         reservoir snapshot. A fluid's inflow is made at the piston sample's measured
         (ρ0, E0), its snapshot screened by the flow it feeds in at D_guess
-        (``window.reservoir_screen``, ``inflow_screen``), so both schemes share one pole (the sample's more precise P0, T0 are kept;
-        the inflow's own measurement, a ~1000-atom box over 2 τ, is stored beside them as a
-        check); a crystal's keeps the nominal lattice (the seam needs its registry) and T0,
+        (``window.reservoir_screen``, ``inflow_screen``), so both schemes share one pole
+        (the sample's more precise P0, T0 are kept; the inflow's own measurement, a
+        ~1000-atom box over 2 τ, is stored beside them as a check); a crystal's keeps the nominal lattice (the seam needs its registry) and T0,
         and its pole is the inflow's. The window runs ``settle_time`` at the guessed D (the
         set-up transient: new boundaries, the first seam), then ω is normalised by the pole
         (ρ0, P0) and the shocked slab between the outflow edge and the front (``shock.gap``

@@ -131,8 +131,8 @@ def make_reservoir(
     moved at −0.03 to +0.06 σ/τ, and AMW's P at u_p = 2 followed it (about −1 % of P for
     +0.06 σ/τ). With ``screen`` (``InflowScreen``) the candidates closest to the target are
     tried in that order, each fed as a uniform flow through a window (``inflow_drift``),
-    and the first whose flow is within ``screen.tolerance`` of the inflow's is kept (else the
-    one closest to it); the pole then carries the kept snapshot's flow ``inflow_du`` and its
+    and the first whose flow is within ``screen.tolerance``·``screen.speed`` of the inflow's
+    is kept (else the one closest to it; one that cannot reach E0 is passed over); the pole then carries the kept snapshot's flow ``inflow_du`` and its
     error, and how many were tried (``screened``).
 
     The returned pole is the inflow material's state, which the window points refer to:
@@ -169,7 +169,12 @@ def make_reservoir(
         best, tried = None, 0
         for k in order[: max(1, min(screen.candidates, n_candidates))]:
             tried += 1
-            cand = _snapshot(kit, snaps[k], L, dt, ke_T0, E0_target)
+            try:
+                cand = _snapshot(kit, snaps[k], L, dt, ke_T0, E0_target)
+            except WindowError:
+                if tried == 1:  # the nearest cannot reach E0: none can
+                    raise
+                continue
             d, d_err = inflow_drift(kit, cand, screen)
             if best is None or abs(d) < abs(best[1]):
                 _close(best[0] if best is not None else None)
