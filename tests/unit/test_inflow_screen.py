@@ -78,3 +78,26 @@ def test_a_scene_without_candidates_has_no_screen() -> None:
     scr = mdw.inflow_screen(w, 8.0, 9.5)
     assert scr is not None and scr.speed == 9.5 and scr.candidates == 4
     assert (scr.near, scr.far) == (8.0, pytest.approx(32.0))
+
+
+def test_a_candidate_that_cannot_reach_the_pole_energy_is_passed_over(monkeypatch) -> None:
+    """The second candidate cannot be rescaled to E0 (``WindowError`` reservoir_energy): the
+    screen goes on to the third; the nearest one failing so still stops the stage."""
+    from hugomap.failures import WindowError
+
+    real = mdw._snapshot
+    calls = {"n": 0}
+
+    def second_fails(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == which:
+            raise WindowError("reservoir_energy", "scripted")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(mdw, "_snapshot", second_fails)
+    which = 2
+    _, pole, seen = _reservoir(_screen(6), [0.05, 0.004], monkeypatch)
+    assert len(seen) == 2 and pole["screened"] == 3 and pole["du"] == pytest.approx(0.004)
+    calls["n"], which = 0, 1
+    with pytest.raises(WindowError):
+        _reservoir(_screen(6), [0.0], monkeypatch)
