@@ -118,7 +118,8 @@ def window(tmp_path_factory):
     middle), its reservoir made by LAMMPS, run through inflow releases and outflow cuts."""
     from hugomap.lammps.backend import BACKEND
     from hugomap.lammps.window import LammpsKit
-    from hugomap.md.window import MDWindow, make_reservoir
+    from hugomap.md.reservoir import make_reservoir
+    from hugomap.md.window import MDWindow
 
     sc = _scene()
     sim = _sim(cells=(20, 4, 4))
@@ -195,8 +196,9 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
     from hugomap.lammps.si import WindowSIView
     from hugomap.lammps.simulation import LammpsSimulation
     from hugomap.lammps.window import LammpsKit
+    from hugomap.md.reservoir import make_reservoir
     from hugomap.md.sample import fcc_positions, maxwell_velocities
-    from hugomap.md.window import MDWindow, make_reservoir
+    from hugomap.md.window import MDWindow
 
     cu = {"solver": "lammps", "phase": "crystal", "schemes": ["piston"],
           "model": {"units": "metal", "pair_style": "eam/alloy",
@@ -252,7 +254,7 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
 
 
 def test_the_inflow_screen_runs_on_lammps_as_on_the_numba_md() -> None:
-    """``md.window.inflow_drift`` through ``LammpsKit``: one snapshot, made by LAMMPS, fed as
+    """``md.reservoir.inflow_drift`` through ``LammpsKit``: one snapshot, made by LAMMPS, fed as
     a uniform flow (V = 10.7 σ/τ) through a 14-σ window by LAMMPS and by the numba MD (the
     same truncated-and-shifted LJ, velocity Verlet at the same dt). Measured: −0.0489 ±
     0.043 σ/τ by both, equal to 1e-5 over these 6.4 τ (the two integrations stay together);
@@ -263,7 +265,7 @@ def test_the_inflow_screen_runs_on_lammps_as_on_the_numba_md() -> None:
     from hugomap.lammps.window import LammpsKit
     from hugomap.md.kit import MDKit
     from hugomap.md.potential import LJParams
-    from hugomap.md.window import InflowScreen, inflow_drift, make_reservoir
+    from hugomap.md.reservoir import InflowScreen, inflow_drift, make_reservoir
 
     kit = LammpsKit(_scene()["model"])
     res, _ = make_reservoir((4, 4), 0.8, 2.0, None, DT, 5, 0.3, n_candidates=4, every=10,

@@ -24,9 +24,10 @@ import pytest
 from hugomap.analysis.shock import bin_edges, slab_state
 from hugomap.md.backend import MDProfile
 from hugomap.md.potential import LJParams
+from hugomap.md.reservoir import make_reservoir
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation
-from hugomap.md.window import MDWindow, make_reservoir
+from hugomap.md.window import MDWindow
 
 RHO0, T0, V = 0.8, 2.0, 6.0
 

@@ -1,4 +1,4 @@
-"""The inflow reservoir's screen (``md.window.make_reservoir`` with an ``InflowScreen``): which
+"""The inflow reservoir's screen (``md.reservoir.make_reservoir`` with an ``InflowScreen``): which
 candidate snapshot it keeps.
 
 The flow each candidate feeds in (``inflow_drift``, a uniform-flow window run) is replaced
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import hugomap.md.window as mdw
+import hugomap.md.reservoir as mdw
 from hugomap.md.potential import LJParams
 
 LJ = LJParams(rc=2.5, shift=True, skin=0.3)

@@ -560,7 +560,7 @@ def measure_point(
     closes = all(_closes(v, res_err[k], residual_tol) for k, v in res.items())
     # ok is a jump from what is actually ahead too: a state ahead measurably off the pole
     # moves the residuals taken from it beyond the tolerance (``ahead_off_pole``)
-    off = ahead_off_pole({**out, "u_p": u_p}, residual_tol, pole)
+    off = ahead_off_pole(out, residual_tol, pole)  # out["u_p"] is the jump's u_p
     out["ahead_off_pole"] = float(off is not None)
     converged = bool(finite and enough and closes and off is None)
     out["converged"] = converged

@@ -339,17 +339,14 @@ class LammpsBackend:
         self, solver, loaded: xr.Dataset, scene: dict, u_p: float, front: float,
         D_guess: float, pole: Pole, info: dict,
     ) -> WindowStart:  # fmt: skip
-        """The MD backend's window (``MDBackend.open_window``) on LAMMPS: a reservoir made
-        by LAMMPS with the scene's model (``md.window.make_reservoir`` through
-        ``window.LammpsKit``; a fluid's at the sample's measured (ρ0, E0), its snapshot
-        screened by the flow it feeds in (``window.reservoir_screen``), so window and
-        piston points share one pole, a crystal's at the lattice's ρ0 and T0, its pole the
-        inflow's), ``MDWindow.from_piston`` with the front at ``window.front_fraction``,
-        ``settle_time`` at the guessed D, then ω normalised by the pole and the shocked slab
-        between the outflow edge and the front (``shock.gap`` clear of both). ``front``,
+        """The MD backend's window (``MDBackend.open_window``: the reservoir at the pole,
+        its snapshot screened, ``MDWindow.from_piston``, the settling, ω) on LAMMPS, the
+        reservoir made by LAMMPS with the scene's model (``md.reservoir.make_reservoir``
+        through ``window.LammpsKit``). ``front``,
         ``u_p``, ``D_guess`` arrive in the frame's units (metal: SI) and are converted to
         the simulation's; the returned window, pole and ω are in the frame's."""
-        from ..md.window import MDWindow, inflow_screen, make_reservoir
+        from ..md.reservoir import inflow_screen, make_reservoir
+        from ..md.window import MDWindow
         from ..window.methods import OmegaSignal
         from .simulation import native
         from .window import LammpsKit

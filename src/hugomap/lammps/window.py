@@ -2,7 +2,7 @@
 ``LammpsSimulation``, through ``LammpsKit``; in units metal seen in SI through
 ``si.WindowSIView``.
 
-``LammpsKit`` is what ``MDWindow`` and ``md.window.make_reservoir`` need beyond the
+``LammpsKit`` is what ``MDWindow`` and ``md.reservoir.make_reservoir`` need beyond the
 simulation's interface (``md.kit.ParticleKit``): the domain and the reservoir are LAMMPS
 instances of the scene's own model (``model``), the reservoir a fully periodic box
 (``LammpsSimulation(periodic_x=True)``) of the scene's FCC lattice at (ρ0, T0) under

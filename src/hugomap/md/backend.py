@@ -275,7 +275,8 @@ class MDBackend:
         (ρ0, P0) and the shocked slab between the outflow edge and the front (``shock.gap``
         clear of both)."""
         from ..window.methods import OmegaSignal
-        from .window import MDWindow, inflow_screen, make_reservoir
+        from .reservoir import inflow_screen, make_reservoir
+        from .window import MDWindow
 
         w, sh, s = scene["window"], scene["shock"], scene["sample"]
         fluid = scene["phase"] != "crystal"

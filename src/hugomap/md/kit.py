@@ -1,5 +1,5 @@
 """What the moving window (``md.window.MDWindow``) and its inflow reservoir
-(``md.window.make_reservoir``) need to know of a particle backend beyond the simulation's own
+(``md.reservoir.make_reservoir``) need to know of a particle backend beyond the simulation's own
 interface (``ParticleKit``), and that knowledge for the numba MD backend (``MDKit``);
 ``lammps.window.LammpsKit`` is LAMMPS's.
 """
