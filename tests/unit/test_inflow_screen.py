@@ -71,13 +71,14 @@ def test_a_scene_without_candidates_has_no_screen() -> None:
     """The screen samples the window's state-ahead slab: from gap to (1 − front_fraction)
     L − gap upstream of the inflow seam (``analysis.shock.measure_point``'s ahead slab)."""
     w = {"length": 100.0, "front_fraction": 0.6, "ghost_width": 3.0, "cut_every": 2.0,
-         "sync_steps": 25,
+         "sync_steps": 25, "reservoir_segment": 40.0,
          "reservoir_screen": {"candidates": 0, "tolerance": 0.001, "average_time": 12.0}}  # fmt: skip
     assert mdw.inflow_screen(w, 8.0, SPEED) is None
     w["reservoir_screen"]["candidates"] = 4
     scr = mdw.inflow_screen(w, 8.0, 9.5)
     assert scr is not None and scr.speed == 9.5 and scr.candidates == 4
     assert (scr.near, scr.far) == (8.0, pytest.approx(32.0))
+    assert scr.segment == 40.0  # the screen lays the inflow as the window will
 
 
 def test_a_candidate_that_cannot_reach_the_pole_energy_is_passed_over(monkeypatch) -> None:

@@ -369,7 +369,7 @@ class LammpsBackend:
             sim, res, front / to_native, self._native_velocity(u_p),
             self._native_velocity(D_guess), w["length"], w["front_fraction"], w["ghost_width"],
             w["cut_every"], w["sync_steps"], crystal=not fluid,
-            lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0), kit=kit,
+            lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0), kit=kit, segment=w["reservoir_segment"],
         )  # fmt: skip
         res.close()
         wpole = pole if fluid else Pole.from_dict(inflow)

@@ -167,6 +167,7 @@ class InflowScreen:
     average_time: float
     candidates: int
     tolerance: float
+    segment: float = 0.0
 
 
 def inflow_screen(window: dict, gap: float, speed: float) -> InflowScreen | None:
@@ -181,7 +182,7 @@ def inflow_screen(window: dict, gap: float, speed: float) -> InflowScreen | None
     return InflowScreen(
         float(speed), float(gap), max(far, float(gap) + 1.0), float(window["ghost_width"]),
         float(window["cut_every"]), int(window["sync_steps"]), float(rs["average_time"]),
-        int(rs["candidates"]), float(rs["tolerance"]),
+        int(rs["candidates"]), float(rs["tolerance"]), float(window["reservoir_segment"]),
     )  # fmt: skip
 
 
@@ -215,10 +216,10 @@ def inflow_drift(kit, snap, screen: InflowScreen) -> tuple[float, float]:
     front = wall + screen.ghost_width + sc + 0.5 * length
     win = MDWindow.from_piston(
         flow, snap, front, 0.0, screen.speed, length, 0.5, screen.ghost_width,
-        screen.cut_every, screen.sync_steps, kit=kit,
+        screen.cut_every, screen.sync_steps, kit=kit, segment=screen.segment,
     )  # fmt: skip
     _close(flow)
-    flush = (length + Lr) / screen.speed
+    flush = (length + win.geom.segment) / screen.speed
     win.advance(int(round(flush / win.dt)))
     g = win.geom
     series = []

@@ -87,7 +87,9 @@ MARGIN = 2.0  # σ (kit scales) of empty box beyond the frozen layers
 class WindowGeometry:
     """x_lo, x_hi [σ]: window edges in the box; ghost_width [σ]: frozen outflow layer;
     cut_every [σ]: face travel between outflow cuts; sync_steps: steps between boundary
-    updates; res_length [σ]: reservoir length (a whole number of lattice cells)."""
+    updates; res_length [σ]: reservoir length (a whole number of lattice cells);
+    seg_length [σ]: the length of the snapshot laid frozen behind ``x_hi`` at a time, a
+    whole fraction of res_length (0: the whole snapshot)."""
 
     x_lo: float
     x_hi: float
@@ -95,6 +97,16 @@ class WindowGeometry:
     cut_every: float
     sync_steps: int
     res_length: float
+    seg_length: float = 0.0
+
+    @property
+    def segment(self) -> float:
+        """The frozen copy's length [σ]."""
+        return self.seg_length if self.seg_length > 0 else self.res_length
+
+    @property
+    def n_segments(self) -> int:
+        return max(1, int(round(self.res_length / self.segment)))
 
     @property
     def length(self) -> float:
@@ -130,6 +142,7 @@ class MDWindow:
         x_face: float,
         next_id: int,
         kit=None,
+        seg_index: int = 0,
     ):
         self.kit = kit if kit is not None else _kit_of(sim)
         self.sim = sim
@@ -141,6 +154,7 @@ class MDWindow:
         self.x_face_in = float(x_face_in)
         self.x_face = float(x_face)
         self.next_id = int(next_id)
+        self.seg_index = int(seg_index)
         self.area = float(sim.state.L[1] * sim.state.L[2])
         self.n_res = int(self.res_x.shape[0])
         self.kit.skip_force_rows(sim, self.n_res)
@@ -224,6 +238,7 @@ class MDWindow:
         crystal: bool = False,
         lattice: float | None = None,
         kit=None,
+        segment: float = 0.0,
     ) -> MDWindow:
         """Cut a window out of a piston run (piston frame: piston at rest at the left wall,
         upstream material at −u_p) with the front at ``front_fraction`` of ``length`` from
@@ -235,7 +250,9 @@ class MDWindow:
         continue the sample's (period a/2 along each axis, ``lattice`` = a).
 
         ``kit`` (default ``MDKit``) builds the domain simulation; ``wall_layer`` (default 4
-        of the kit's ``scale``) is kept clear of the piston run's walls."""
+        of the kit's ``scale``) is kept clear of the piston run's walls. ``segment`` > 0
+        lays the snapshot frozen behind ``x_hi`` a segment at a time, the longest whole
+        fraction of L_r not above it (and at least one; module docstring)."""
         kit = kit if kit is not None else _kit_of(sim)
         unit = kit.units[0]
         wall_layer = 4.0 * kit.scale if wall_layer is None else wall_layer
@@ -288,18 +305,16 @@ class MDWindow:
         frozen = x[:, 0] < x_lo
         ids[frozen] = -1 - n_res - ids[frozen]
         v[frozen] = [u_out, 0.0, 0.0]
-        # The first inflow copy, right behind the sample's upstream end.
-        xi = rx.copy()
-        xi[:, 0] += x_hi
-        vi = np.zeros_like(rv)
-        vi[:, 0] = u_in
+        seg = Lr / max(1, int(Lr // segment)) if segment > 0 else 0.0
+        geom = WindowGeometry(x_lo, x_hi, ghost_width, cut_every, sync_steps, Lr, seg)
+        # The first inflow copy (its first segment), right behind the sample's upstream end.
+        xi, vi, idi = _inflow_copy(rx, geom, 0, x_hi, u_in)
         x = np.concatenate([x, xi])
         v = np.concatenate([v, vi])
-        ids = np.concatenate([ids, -1 - np.arange(n_res, dtype=np.int64)])
+        ids = np.concatenate([ids, idi])
         x, v, ids = _remove_seam_overlaps(x, v, ids, n_res, x_hi, s.L, 0.8 * kit.scale)
-        Lx = x_hi + 2.0 * Lr + 2.0 * margin
+        Lx = x_hi + 2.0 * geom.segment + 2.0 * margin
         L = np.array([Lx, s.L[1], s.L[2]])
-        geom = WindowGeometry(x_lo, x_hi, ghost_width, cut_every, sync_steps, Lr)
         wall_x = x_lo  # a reflecting wall at the face: no atom leaks into the layer
         # The window keeps the piston run's clock (and its dt).
         dom = kit.domain(sim, x, v, ids, L, np.array([wall_x, u_out, Lx, 0.0]))
@@ -362,15 +377,14 @@ class MDWindow:
             v[copy] = self.res_v[j] + np.array([self.u_in, 0.0, 0.0])
             ids[copy] = self.next_id + np.arange(int(copy.sum()), dtype=np.int64)
             self.next_id += int(copy.sum())
-            # The next copy: the snapshot's periodic image one reservoir length behind.
-            face = self.x_face_in + g.res_length
-            xi = self.res_x.copy()
-            xi[:, 0] += face
-            vi = np.zeros_like(xi)
-            vi[:, 0] = self.u_in
+            # The next copy: the snapshot's next segment (after the last, its first: the
+            # snapshot's periodic image) one segment behind.
+            face = self.x_face_in + g.segment
+            self.seg_index = (self.seg_index + 1) % g.n_segments
+            xi, vi, idi = _inflow_copy(self.res_x, g, self.seg_index, face, self.u_in)
             x = np.concatenate([x, xi])
             v = np.concatenate([v, vi])
-            ids = np.concatenate([ids, -1 - np.arange(self.n_res, dtype=np.int64)])
+            ids = np.concatenate([ids, idi])
             self.x_face_in = face
         if cut:
             behind = x[:, 0] < g.x_lo
@@ -441,6 +455,7 @@ class MDWindow:
                     "x_face_in": self.x_face_in,
                     "x_face": self.x_face,
                     "next_id": self.next_id,
+                    "seg_index": self.seg_index,
                     "outflow": self.outflow,
                     "z_out": self.z_out,
                     "tau_fast": self.tau_fast,
@@ -475,6 +490,7 @@ class MDWindow:
         win = cls(
             sim, ds["res_x"].values.copy(), ds["res_v"].values.copy(), geom, st["u_in"],
             st["u_out"], st["x_face_in"], st["x_face"], st["next_id"], kit=kit,
+            seg_index=int(st.get("seg_index", 0)),
         )  # fmt: skip
         # the outflow's state (absent from checkpoints written before the absorbing outflow)
         for key in ("outflow", "z_out", "tau_fast", "tau_slow", "p_fast", "p_slow", "u_face",
@@ -488,6 +504,22 @@ class MDWindow:
         """Load a window checkpoint written by ``save`` (refused with ``CheckpointError`` if
         it is unreadable, foreign, outdated or altered)."""
         return cls.from_dataset(read_checkpoint(path, verify=False), path, kit)
+
+
+def _inflow_copy(
+    res_x: np.ndarray, geom: WindowGeometry, j: int, face: float, u_in: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """The frozen inflow copy of segment ``j`` of the snapshot (its atoms with j s ≤ x <
+    (j + 1) s, s = ``geom.segment``), its downstream face at ``face``: positions, velocities
+    (rigid, u_in along x) and ids (−1 − the snapshot index)."""
+    s = geom.segment
+    k = np.minimum((res_x[:, 0] // s).astype(np.int64), geom.n_segments - 1)
+    sel = np.nonzero(k == j)[0]
+    xi = res_x[sel].copy()
+    xi[:, 0] += face - j * s
+    vi = np.zeros_like(xi)
+    vi[:, 0] = u_in
+    return xi, vi, -1 - sel.astype(np.int64)
 
 
 def _remove_seam_overlaps(
