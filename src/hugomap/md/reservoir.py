@@ -30,11 +30,10 @@ def make_reservoir(
 
     A fully periodic FCC box at (ρ0, T0), as many cells along x as make L_r ≥ 4 (rc + skin)
     and L_r ≥ ``min_length`` [length], thermostatted (CSVR) for ``equilibrate_time`` [τ].
-    Every released copy carries the same seam disturbance (the mobile material packs
-    against the frozen copy's face while it is frozen), so the material it feeds in is off
-    the pole by about that disturbance over L_r: on the default liquid at u_p = 3 the
-    material ahead of AMW's front moved at +0.064, +0.038, +0.023 σ/τ, its ρ 0.62, 0.27,
-    0.17 % above ρ0, with L_r = 11, 22, 45 σ (``window.reservoir_length``). One snapshot of a few hundred atoms
+    The material a snapshot feeds in is off the pole by a disturbance of its own: on the
+    default liquid at u_p = 3 the material ahead of AMW's front moved at +0.064, +0.038,
+    +0.023 σ/τ, its ρ 0.62, 0.27, 0.17 % above ρ0, with L_r = 11, 22, 45 σ
+    (``window.reservoir_length``; below). One snapshot of a few hundred atoms
     carries the canonical fluctuations of its energy (several % per atom), and every copy
     repeats them, so the snapshot is chosen: of ``n_candidates`` taken every ``every`` steps,
     the one whose potential energy is closest to the target, its velocities then rescaled
@@ -43,11 +42,12 @@ def make_reservoir(
     was up to 0.06 ε per atom off, which moved P0 by 2 %, as much as a weak shock's
     P − P0 error budget) or, without a target, its temperature T0.
 
-    The seam disturbance differs from snapshot to snapshot (a frozen copy is one static
-    configuration, and the force it exerts on the released material while it is frozen is
-    that configuration's): on the default liquid the material fed in by eight seeds' snapshots
-    moved at −0.03 to +0.06 σ/τ, and AMW's P at u_p = 2 followed it (about −1 % of P for
-    +0.06 σ/τ). With ``screen`` (``InflowScreen``) the candidates closest to the target are
+    The disturbance differs from snapshot to snapshot and shrinks as the snapshot grows:
+    fed as a uniform flow at 10.76 σ/τ (``inflow_drift``, 20 τ averaged), the default
+    liquid's snapshots flowed at −0.06 to +0.06 σ/τ (sd 0.030, 20 snapshots) with L_r =
+    40 σ, sd 0.015 (8) with 120 σ and about 0.01 with 240 σ (−0.011 to +0.019, errors
+    0.01; laid in 40-σ segments, ``MDWindow.from_piston(segment=)``), and AMW's P at u_p = 2
+    followed the flow fed in (about −1 % of P for +0.06 σ/τ). With ``screen`` (``InflowScreen``) the candidates closest to the target are
     tried in that order, each fed as a uniform flow through a window (``inflow_drift``),
     and the first whose flow is within ``screen.tolerance``·``screen.speed`` of the inflow's
     is kept (else the one closest to it; one that cannot reach E0 is passed over); the pole then carries the kept snapshot's flow ``inflow_du`` and its

@@ -7,13 +7,16 @@ notes): u_in = −W, u_out = u_p − W, so u_p = u_out − u_in, and a front at 
 has D = −u_in. Reduced LJ units (σ, τ, ε; m = 1).
 
 Inflow (no gap or overlap at the seam). Fresh material comes from a reservoir: a snapshot
-of a small fully periodic box (length L_r ≥ 2 (rc + skin) + 1 σ, the domain's transverse size)
-equilibrated at the scene's initial state. Beyond ``x_hi`` one copy of the snapshot moves
-rigidly at u_in (frozen, like the outflow layer): a piston that pushes fresh material in.
-When its face reaches ``x_hi``, the copy is released (its atoms become mobile with the
-snapshot's thermal velocities + u_in) and the next copy is laid right behind it. Two
-consecutive copies are the snapshot and its own periodic image, so the seam between them is
-the reservoir's periodic boundary, not a cut: no gap, no overlap. (An earlier design ran the
+of a fully periodic box (length L_r, the domain's transverse size) equilibrated at the
+scene's initial state. Beyond ``x_hi`` one copy of the snapshot, or of a segment of it,
+moves rigidly at u_in (frozen, like the outflow layer): a piston that pushes fresh material
+in. When its face reaches ``x_hi``, the copy is released (its atoms become mobile with the
+snapshot's thermal velocities + u_in) and the next one is laid right behind it: the next
+segment, and after the last the first again. Consecutive segments are neighbours in the
+snapshot, and the last and the first are the snapshot's periodic image, so the seam between
+two copies is never a cut: no gap, no overlap. The flow a snapshot feeds in is off u_in by
+a disturbance of its own that shrinks as the snapshot grows (``md.reservoir``); segments
+let a long snapshot feed the window at the cost of a short one. (An earlier design ran the
 reservoir alongside and fed its atoms one by one; the domain's copies of the seam atoms then
 drift apart from the reservoir's within the ~0.5 τ they spend near the seam, and the flow
 test heated by 30 %.)
