@@ -5,6 +5,7 @@ disturbance shrinks with its length), but frozen whole behind the inflow it woul
 box. So it is laid frozen a segment at a time: the segments are consecutive pieces of the
 snapshot, each laid right behind the last, so the material fed in is the snapshot itself,
 seamless, and after the last segment comes the first again (the snapshot's periodic image).
+Not the default: on a 240-σ snapshot AMW oscillated (docs/window-methods.md).
 """
 
 from __future__ import annotations

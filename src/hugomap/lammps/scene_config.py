@@ -45,7 +45,7 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
                   "avg_length": 30.0, "max_time": 100.0},
         # the MD backend's window defaults
         "window": {"length": 50.0, "ghost_width": 3.0, "cut_every": 2.0,
-                   "reservoir_equilibrate_time": 3.0, "reservoir_length": 240.0,
+                   "reservoir_equilibrate_time": 3.0, "reservoir_length": 40.0,
                    "reservoir_segment": 40.0,
                    "settle_time": 10.0, "window_time": 2.0, "average_time": 10.0},
         "window.dichotomy": {"half_width": 0.4, "tolerance": 0.02},

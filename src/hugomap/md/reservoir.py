@@ -46,8 +46,9 @@ def make_reservoir(
     fed as a uniform flow at 10.76 σ/τ (``inflow_drift``, 20 τ averaged), the default
     liquid's snapshots flowed at −0.06 to +0.06 σ/τ (sd 0.030, 20 snapshots) with L_r =
     40 σ, sd 0.015 (8) with 120 σ and about 0.01 with 240 σ (−0.011 to +0.019, errors
-    0.01; laid in 40-σ segments, ``MDWindow.from_piston(segment=)``), and AMW's P at u_p = 2
-    followed the flow fed in (about −1 % of P for +0.06 σ/τ). With ``screen`` (``InflowScreen``) the candidates closest to the target are
+    0.01; laid in 40-σ segments, ``MDWindow.from_piston(segment=)``; but on a 240-σ
+    snapshot AMW oscillated), and AMW's P at u_p = 2 followed the flow fed in (about −1 %
+    of P for +0.06 σ/τ). With ``screen`` (``InflowScreen``) the candidates closest to the target are
     tried in that order, each fed as a uniform flow through a window (``inflow_drift``),
     and the first whose flow is within ``screen.tolerance``·``screen.speed`` of the inflow's
     is kept (else the one closest to it; one that cannot reach E0 is passed over); the pole then carries the kept snapshot's flow ``inflow_du`` and its
