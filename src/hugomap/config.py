@@ -252,12 +252,15 @@ def _scheme_problems(cfg: dict, schema: dict) -> tuple[list[str], set[str]]:
                 continue
             why = (f"scheme {scheme!r} needs solver: {' or '.join(need)} (scene {name!r} has "
                    f"solver {solver!r})")  # fmt: skip
+            # the key path quotes a name that is not an identifier (a control character in
+            # it would otherwise break the message's lines)
+            at = key_path(("scenes", name, "schemes"))
             if own:
-                problems.append(f"scenes.{name}.schemes = {_show(schemes)}: {why}; allowed "
+                problems.append(f"{at} = {_show(schemes)}: {why}; allowed "
                                 f"values {runs[solver]}")  # fmt: skip
             else:  # inherited: the top-level key is the one set; the scene's would override it
-                problems.append(f"schemes = {_show(schemes)}, inherited as scenes.{name}.schemes:"
-                                f" {why}; give scenes.{name}.schemes from {runs[solver]}")  # fmt: skip
+                problems.append(f"schemes = {_show(schemes)}, inherited as {at}:"
+                                f" {why}; give {at} from {runs[solver]}")  # fmt: skip
             refused.add(str(name))
     return problems, refused
 

@@ -431,6 +431,17 @@ def test_found_by_fuzzing(mutate, expect: str) -> None:
     assert expect in str(ei.value)
 
 
+def test_a_control_character_in_a_scene_name_keeps_the_message_to_its_lines() -> None:
+    """Found by the schema-drawn fuzzing: a scene named '\\r' whose inherited scheme its
+    solver does not run was written raw into scenes.<name>.schemes, splitting the line."""
+    cfg = {"scenes": {"\r": {"solver": "md", "phase": "liquid", "sample": math.nan,
+                              "shock": math.nan}}, "schemes": ["msst"]}  # fmt: skip
+    assert check(cfg) == "refused"
+    with pytest.raises(ConfigError) as ei:
+        validate_config(cfg)
+    assert "inherited as scenes['\\r'].schemes" in str(ei.value)
+
+
 def test_non_string_and_reserved_scene_names() -> None:
     """Scene names become folders: non-strings, reserved folders, a newline are refused."""
     cfg = copy.deepcopy(BASES["tiny"])
