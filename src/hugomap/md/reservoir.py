@@ -153,8 +153,8 @@ class InflowScreen:
     flow of ``speed`` [velocity; the window's expected D] sampled where the window measures
     the state ahead of its front, from ``near`` to ``far`` [length] upstream of the inflow
     seam x_hi (``window_ahead``), through a window ``far`` + 5 ``kit.scale`` long
-    (``ghost_width``, ``cut_every``, ``sync_steps`` as the window's), flushed for one transit
-    of window and reservoir, then averaged for ``average_time`` [time]; ``candidates``
+    (``ghost_width``, ``cut_every``, ``sync_steps``, the inflow ``segment`` as the window's),
+    flushed for one transit of window and inflow copy, then averaged for ``average_time`` [time]; ``candidates``
     tried at most; ``tolerance`` [-]: a snapshot is kept when its material flows within
     ``tolerance``·``speed`` of the inflow (the density it then arrives at is off ρ0 by about
     that fraction: mass flux ρ (V − δu) = ρ0 V)."""
