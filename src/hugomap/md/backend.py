@@ -265,9 +265,10 @@ class MDBackend:
         D_guess: float, pole: Pole, info: dict,
     ) -> WindowStart:  # fmt: skip
         """``MDWindow.from_piston`` with the front at ``window.front_fraction``, its inflow a
-        reservoir snapshot. A fluid's inflow is made at the piston sample's measured
-        (ρ0, E0), its snapshot screened by the flow it feeds in at D_guess
-        (``window.reservoir_screen``, ``inflow_screen``), so both schemes share one pole
+        reservoir snapshot, run on beside the window (``window.inflow`` = "live",
+        ``md.live_inflow``) or carried frozen. A fluid's inflow is made at the piston
+        sample's measured (ρ0, E0), a frozen snapshot screened by the flow it feeds in at
+        D_guess (``window.reservoir_screen``, ``inflow_screen``), so both schemes share one pole
         (the sample's more precise P0, T0 are kept; the inflow's own measurement, a
         ~1000-atom box over 2 τ, is stored beside them as a check); a crystal's keeps the nominal lattice (the seam needs its registry) and T0,
         and its pole is the inflow's. The window runs ``settle_time`` at the guessed D (the
@@ -285,14 +286,15 @@ class MDBackend:
             solver.lj, solver.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"],
             s["thermostat_tau"], E0_target=pole.E0 if fluid else None,
             min_length=w["reservoir_length"],
-            screen=inflow_screen(w, sh["gap"], D_guess) if fluid else None,
+            screen=inflow_screen(w, sh["gap"], D_guess) if fluid and w["inflow"] == "frozen"
+            else None,
         )  # fmt: skip
         log.info("inflow pole: %s", json.dumps(inflow))
         win = MDWindow.from_piston(
             solver, res, front, u_p, D_guess, w["length"], w["front_fraction"],
             w["ghost_width"], w["cut_every"], w["sync_steps"],
             crystal=not fluid, lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0),
-            segment=w["reservoir_segment"],
+            segment=w["reservoir_segment"], inflow=w["inflow"],
         )  # fmt: skip
         wpole = pole if fluid else Pole.from_dict(inflow)
         o = w["outflow"]

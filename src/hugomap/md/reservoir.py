@@ -169,6 +169,7 @@ class InflowScreen:
     candidates: int
     tolerance: float
     segment: float = 0.0
+    inflow: str = "frozen"
 
 
 def inflow_screen(window: dict, gap: float, speed: float) -> InflowScreen | None:
@@ -218,6 +219,7 @@ def inflow_drift(kit, snap, screen: InflowScreen) -> tuple[float, float]:
     win = MDWindow.from_piston(
         flow, snap, front, 0.0, screen.speed, length, 0.5, screen.ghost_width,
         screen.cut_every, screen.sync_steps, kit=kit, segment=screen.segment,
+        inflow=screen.inflow,
     )  # fmt: skip
     _close(flow)
     flush = (length + win.geom.segment) / screen.speed

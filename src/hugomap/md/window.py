@@ -81,6 +81,7 @@ from ..io.checkpoint import (
     verify_checkpoint,
 )
 from .kit import MDKit, _kit_of
+from .live_inflow import LiveReservoir
 from .simulation import MDSimulation
 
 MARGIN = 2.0  # σ (kit scales) of empty box beyond the frozen layers
@@ -146,8 +147,10 @@ class MDWindow:
         next_id: int,
         kit=None,
         seg_index: int = 0,
+        live: LiveReservoir | None = None,
     ):
         self.kit = kit if kit is not None else _kit_of(sim)
+        self.live = live
         self.sim = sim
         self.res_x = np.asarray(res_x, dtype=float)
         self.res_v = np.asarray(res_v, dtype=float)
@@ -242,6 +245,7 @@ class MDWindow:
         lattice: float | None = None,
         kit=None,
         segment: float = 0.0,
+        inflow: str = "frozen",
     ) -> MDWindow:
         """Cut a window out of a piston run (piston frame: piston at rest at the left wall,
         upstream material at −u_p) with the front at ``front_fraction`` of ``length`` from
@@ -308,7 +312,8 @@ class MDWindow:
         frozen = x[:, 0] < x_lo
         ids[frozen] = -1 - n_res - ids[frozen]
         v[frozen] = [u_out, 0.0, 0.0]
-        seg = Lr / max(1, int(Lr // segment)) if segment > 0 else 0.0
+        # a live copy is the whole snapshot (its atoms cross x_hi one by one)
+        seg = Lr / max(1, int(Lr // segment)) if segment > 0 and inflow != "live" else 0.0
         geom = WindowGeometry(x_lo, x_hi, ghost_width, cut_every, sync_steps, Lr, seg)
         # The first inflow copy (its first segment), right behind the sample's upstream end.
         xi, vi, idi = _inflow_copy(rx, geom, 0, x_hi, u_in)
@@ -322,8 +327,18 @@ class MDWindow:
         # The window keeps the piston run's clock (and its dt).
         dom = kit.domain(sim, x, v, ids, L, np.array([wall_x, u_out, Lx, 0.0]))
         dom.place_walls(wall_x, u_out, Lx, 0.0)
+        live = None
+        if inflow == "live":
+            if not isinstance(kit, MDKit):
+                raise WindowError(
+                    "bad_config", "a live inflow reservoir runs on the numba MD backend only"
+                )
+            # the copy laid above is the reservoir at t = 0: unwrap = rx, X = rx + x_hi e_x
+            live = LiveReservoir(kit.periodic(rx.copy(), rv.copy(), r.L.copy(), sim.dt))
+        elif inflow != "frozen":
+            raise ValueError(f"inflow = {inflow!r}: 'frozen' or 'live'")
         return cls(dom, rx, rv, geom, u_in, u_out, x_face_in=x_hi, x_face=x_lo,
-                   next_id=int(np.count_nonzero(ids >= 0)), kit=kit)  # fmt: skip
+                   next_id=int(np.count_nonzero(ids >= 0)), kit=kit, live=live)  # fmt: skip
 
     # -- the time loop -------------------------------------------------------------------------
     @property
@@ -347,12 +362,30 @@ class MDWindow:
         """Advance ``n_steps`` (rounded up to whole boundary updates of ``sync_steps``)."""
         k = self.geom.sync_steps
         for _ in range(max(1, math.ceil(n_steps / k))):
-            self.sim.advance(k)
-            self.x_face_in += self.u_in * k * self.sim.dt
+            if self.live is None:
+                self.sim.advance(k)
+                self.x_face_in += self.u_in * k * self.sim.dt
+            else:
+                for _ in range(k):
+                    self._drive_copy()
+                    self.sim.advance(1)
+                    self.x_face_in += self.u_in * self.sim.dt
             self.x_face += self.u_face * k * self.sim.dt
             self._update_boundaries()
             if self.outflow == "absorbing":
                 self._steer_outflow(k * self.sim.dt)
+
+    def _drive_copy(self) -> None:
+        """Live inflow: step the reservoir and give each atom of the copy behind ``x_hi`` the
+        velocity that carries it, in the coming step, onto its reservoir trajectory's image
+        (``LiveReservoir.images``; module docstring of ``md.live_inflow``)."""
+        s, dt = self.sim.state, self.sim.dt
+        self.live.step(dt)
+        copy = (s.ids < 0) & (s.ids >= -self.n_res)
+        X = self.live.images(-1 - s.ids[copy], self.x_face_in + self.u_in * dt)
+        d = X - s.x[copy]
+        d[:, 1:] -= s.L[1:] * np.rint(d[:, 1:] / s.L[1:])
+        s.v[copy] = d / dt
 
     def _update_boundaries(self) -> None:
         """Release the inflow copy that reached ``x_hi`` and lay the next one behind it; cut
@@ -368,13 +401,35 @@ class MDWindow:
                 f"the outflow face moved {self.x_face - g.x_lo:.2f} {self.kit.units[0]} into the "
                 f"window (u_out = {self.u_out:.4g} {self.kit.units[1]} > 0 for too long)",
             )
-        step_travel = -self.u_in * g.sync_steps * self.sim.dt
-        release = self.x_face_in < g.x_hi + step_travel
+        if self.live is None:
+            step_travel = -self.u_in * g.sync_steps * self.sim.dt
+            release = self.x_face_in < g.x_hi + step_travel
+        else:  # atom by atom: each image that has crossed x_hi
+            crossed = np.nonzero(self.live.image_x(self.x_face_in) < g.x_hi)[0]
+            release = crossed.size > 0
         cut = self.x_face < g.x_lo - g.cut_every
         if not (release or cut):
             return
         x, v, ids = s.x.copy(), s.v.copy(), s.ids.copy()
-        if release:
+        if release and self.live is not None:
+            copy = (ids < 0) & (ids >= -self.n_res)
+            gone = np.zeros(self.n_res, dtype=bool)
+            gone[crossed] = True
+            m = copy.copy()
+            m[copy] = gone[-1 - ids[copy]]
+            v[m] = self.live.velocities()[-1 - ids[m]] + np.array([self.u_in, 0.0, 0.0])
+            ids[m] = self.next_id + np.arange(int(m.sum()), dtype=np.int64)
+            self.next_id += int(m.sum())
+            # the same atoms' next images, L_r behind: the reservoir's trajectories go on
+            self.live.image[crossed] += 1
+            xi = self.live.images(crossed, self.x_face_in)
+            xi[:, 1:] -= s.L[1:] * np.floor(xi[:, 1:] / s.L[1:])
+            vi = np.zeros_like(xi)
+            vi[:, 0] = self.u_in
+            x = np.concatenate([x, xi])
+            v = np.concatenate([v, vi])
+            ids = np.concatenate([ids, -1 - crossed.astype(np.int64)])
+        elif release:
             copy = (ids < 0) & (ids >= -self.n_res)
             j = -1 - ids[copy]
             v[copy] = self.res_v[j] + np.array([self.u_in, 0.0, 0.0])
@@ -443,6 +498,10 @@ class MDWindow:
         """The complete window state: the domain, the reservoir snapshot, the boundaries;
         sealed with the format version and a checksum over all of it (``seal_checkpoint``)."""
         ds = self.sim.to_dataset(extra, attrs)
+        if self.live is not None:  # the reservoir's own checkpoint, under ``live_`` names
+            live = self.live.to_dataset()
+            ds = ds.merge(live)
+            ds.attrs.update(live.attrs)
         ln, vel = self.kit.units
         ds["res_x"] = (("res_atom", "xyz"), self.res_x.copy(), {"units": ln,
                        "long_name": "reservoir snapshot positions"})  # fmt: skip
@@ -493,7 +552,7 @@ class MDWindow:
         win = cls(
             sim, ds["res_x"].values.copy(), ds["res_v"].values.copy(), geom, st["u_in"],
             st["u_out"], st["x_face_in"], st["x_face"], st["next_id"], kit=kit,
-            seg_index=int(st.get("seg_index", 0)),
+            seg_index=int(st.get("seg_index", 0)), live=LiveReservoir.from_dataset(ds, source),
         )  # fmt: skip
         # the outflow's state (absent from checkpoints written before the absorbing outflow)
         for key in ("outflow", "z_out", "tau_fast", "tau_slow", "p_fast", "p_slow", "u_face",
