@@ -16,10 +16,14 @@ segment, and after the last the first again. Consecutive segments are neighbours
 snapshot, and the last and the first are the snapshot's periodic image, so the seam between
 two copies is never a cut: no gap, no overlap. The flow a snapshot feeds in is off u_in by
 a disturbance of its own that shrinks as the snapshot grows (``md.reservoir``); segments
-let a long snapshot feed the window at the cost of a short one. (An earlier design ran the
-reservoir alongside and fed its atoms one by one; the domain's copies of the seam atoms then
-drift apart from the reservoir's within the ~0.5 τ they spend near the seam, and the flow
-test heated by 30 %.)
+let a long snapshot feed the window at the cost of a short one. That is the frozen inflow
+(``inflow = "frozen"``). The live one (``inflow = "live"``, ``md.live_inflow``) runs the
+snapshot on beside the window: the copy behind ``x_hi`` follows the reservoir's trajectories
+(``_drive_copy``, every step) and each atom is released, with the reservoir's state, at the
+boundary update after it crosses ``x_hi``, its next image laid L_r behind; it feeds no flow
+of its own, so it is not screened and not laid in segments. (An earlier design of this kind
+heated the flow test by 30 %; this one keeps its density and temperature,
+``tests/physics/test_window_flow.py``.)
 
 Outflow (holds the shocked state). The material behind ``x_lo`` is a rigid piston made of the
 shocked material itself: the atoms within ``ghost_width`` (≥ rc) behind the face are frozen
