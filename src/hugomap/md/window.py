@@ -393,8 +393,9 @@ class MDWindow:
         s.v[copy] = d / dt
 
     def _update_boundaries(self) -> None:
-        """Release the inflow copy that reached ``x_hi`` and lay the next one behind it; cut
-        the outflow layer when its face has moved ``cut_every`` behind ``x_lo``."""
+        """Release the inflow copy that reached ``x_hi`` and lay the next one behind it (live:
+        release each atom whose image crossed ``x_hi`` and lay its next image L_r behind);
+        cut the outflow layer when its face has moved ``cut_every`` behind ``x_lo``."""
         g, s = self.geom, self.sim.state
         if not self.u_in < 0:
             raise WindowError(
