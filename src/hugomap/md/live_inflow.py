@@ -100,9 +100,7 @@ class LiveReservoir:
         """The reservoir's checkpoint (``MDSimulation.to_dataset``, bit-exact) and its
         unwrapped positions, every name prefixed ``live_``, its seal in ``live_attrs``."""
         ds = self.sim.to_dataset()
-        out = ds.rename({k: LIVE_PREFIX + k for k in ds.data_vars})
-        out = out.rename_dims({d: LIVE_PREFIX + d for d in ds.dims})
-        out = out.drop_vars([c for c in out.coords])
+        out = ds.rename({k: LIVE_PREFIX + k for k in {*ds.variables, *ds.dims}})
         out[LIVE_PREFIX + "unwrap"] = ((LIVE_PREFIX + "atom", LIVE_PREFIX + "xyz"),
                                        self.unwrap.copy(), {"units": "sigma",
                                        "long_name": "live reservoir unwrapped positions, by id"})  # fmt: skip
@@ -119,9 +117,8 @@ class LiveReservoir:
             return None
         own = (LIVE_PREFIX + "unwrap", LIVE_PREFIX + "image")
         names = [k for k in ds.data_vars if k.startswith(LIVE_PREFIX) and k not in own]
-        sub = ds[names].rename({k: k[len(LIVE_PREFIX) :] for k in names})
-        sub = sub.rename_dims({d: d[len(LIVE_PREFIX) :] for d in sub.dims})
-        sub = sub.assign_coords(xyz=["x", "y", "z"])
+        sub = ds[names]
+        sub = sub.rename({k: k[len(LIVE_PREFIX) :] for k in {*sub.variables, *sub.dims}})
         sub.attrs = json.loads(ds.attrs[key])
         sim = MDSimulation.from_dataset(sub, source)
         return cls(sim, ds[own[0]].values.copy(), ds[own[1]].values)
