@@ -212,6 +212,29 @@ def flat_omega_error(signal: OmegaSignal, t: np.ndarray, w: np.ndarray, se: floa
     return float(se)
 
 
+def steered_out_scatter(a: list[float], du: list[float], length: float) -> float:
+    """Standard error of one window's slope from the slopes' own scatter, the steering
+    undone: NaN before 2 differences exist.
+
+    A Galilean shift Δu_j changes dω/dt by Δu_j/L at once (every velocity, u_in and u_out
+    move together), so the slope window k would have had with no steering is
+    ã_k = a_k − Σ_{j<k} Δu_j/L, and its successive differences d_k = a_{k+1} − a_k − Δu_k/L
+    hold only the noise of two windows (and any real change of the front speed): the error
+    of one slope is √(⟨d²⟩/2) (von Neumann's mean square successive difference). It sees
+    what a fit inside one window cannot: ω wandering on time scales of the window or longer.
+    On the LJ liquid at u_p = 1 (u_p/c0 = 0.14; 6-τ windows) the AR(1) error of a slope was
+    0.05 σ/τ in L a_k, while a window held fixed for 36 τ gave 6-τ slopes scattering by
+    0.16-0.19 σ/τ, and this rule read 0.16 from the windows of a steered run. Window 0, which
+    still carries the start's transient, is left out. ``a`` holds windows 0..k, ``du`` the
+    shifts applied after windows 0..k−1; slopes in 1/time, shifts in velocity, ``length`` L.
+    """
+    a_, du_ = np.asarray(a, dtype=float), np.asarray(du, dtype=float)
+    if a_.size < 4 or du_.size < a_.size - 1:
+        return float("nan")
+    d = a_[2:] - a_[1:-1] - du_[1 : a_.size - 1] / length
+    return float(np.sqrt(np.mean(d * d) / 2.0))
+
+
 def _control(
     solver,
     signal: OmegaSignal,
@@ -226,11 +249,13 @@ def _control(
     history: ControlHistory | None,
     on_window: Callable[[], None] | None,
     max_drift: float | None = None,
+    galilean: bool = False,
 ) -> tuple[ControlResult, ControlHistory]:
     """The loop AMW and MW share: per averaging window, fit ω = a t + b (slope error
-    corrected for correlated samples, ``stats.CorrelatedSlope``), stop if the front left the
-    window or the slopes diverge or oscillate, count the windows with |a| ≤ z s_a, else
-    ``apply(correction(a, ω))``.
+    corrected for correlated samples, ``stats.CorrelatedSlope``; with ``galilean`` shifts,
+    AMW's, at least the slopes' own scatter with the steering undone,
+    ``steered_out_scatter``), stop if the front left the window or the slopes diverge or
+    oscillate, count the windows with |a| ≤ z s_a, else ``apply(correction(a, ω))``.
 
     ``max_drift`` [velocity]: the front-speed resolution z s_a L a calm window must reach.
     A window whose slope is 'zero' only because its error is huge proves nothing; when
@@ -249,6 +274,9 @@ def _control(
         t, w = sample_omega(solver, signal, window_time, every)
         a, se, _ = slopes.fit(t, w)
         se = flat_omega_error(signal, t, w, se)
+        if galilean:
+            scatter = steered_out_scatter([*h.a, a], h.du, L)
+            se = max(se, scatter) if np.isfinite(scatter) else se
         bad = _check_inside(w, edge_margin)
         if bad:
             _record(h, solver, t, w, a, se, 0.0)
@@ -304,6 +332,7 @@ def amw(
     return _control(
         solver, signal, lambda a, w: -beta * L * a, solver.galilean_shift, window_time,
         calm_windows, max_windows, every, z, edge_margin, history, on_window, max_drift,
+        galilean=True,
     )  # fmt: skip
 
 

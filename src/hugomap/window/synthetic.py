@@ -10,7 +10,10 @@ moves every velocity at once and changes nothing but the frame. The window [0, L
 upstream (number density ρ0) ahead of the front and shocked material (ρ1) behind it, so
     N = A [ρ1 x_f + ρ0 (L − x_f)] + noise,
 with noise an Ornstein–Uhlenbeck process of standard deviation ``noise`` (in units of ω,
-i.e. of N/(A L (ρ1 − ρ0))) and correlation time ``tau_c``. With the normalisation of
+i.e. of N/(A L (ρ1 − ρ0))) and correlation time ``tau_c``. The front itself may wander:
+``wander`` adds to dx_f/dt an Ornstein–Uhlenbeck velocity of that standard deviation and
+correlation time ``wander_tau`` (an MD front pushed back and forth by acoustic waves), so
+its position drifts like a random walk on times longer than ``wander_tau``. With the normalisation of
 ``methods.OmegaSignal`` (q_up = ρ0 A L, q_sh = ρ1 A L) ω = x_f/L + noise exactly.
 
 Exact answers: AMW (u_p held) must end in the frame u_in = −(c0 + s u_p); MW and the
@@ -56,6 +59,8 @@ class SyntheticFront:
         tau_c: float = 0.0,
         delay: float = 0.0,
         seed: int = 1,
+        wander: float = 0.0,
+        wander_tau: float = 1.0,
     ):
         self.c0, self.s = float(c0), float(s)
         self.u_in, self.u_out = float(u_in), float(u_out)
@@ -67,6 +72,8 @@ class SyntheticFront:
         self.noise, self.tau_c, self.delay = float(noise), float(tau_c), float(delay)
         self.rng = np.random.default_rng(seed)
         self.e = self.noise * self.rng.standard_normal() if self.noise > 0 else 0.0
+        self.wander, self.wander_tau = float(wander), float(wander_tau)
+        self.v = self.wander * self.rng.standard_normal() if self.wander > 0 else 0.0
         self.step = 0
         self._amplitudes: list[tuple[float, float]] = [(-np.inf, self.u_out - self.u_in)]
 
@@ -91,8 +98,11 @@ class SyntheticFront:
 
     def advance(self, n_steps: int) -> None:
         for _ in range(n_steps):
-            self.x_f += self.front_velocity() * self.dt
+            self.x_f += (self.front_velocity() + self.v) * self.dt
             self.step += 1
+        if self.wander > 0:
+            f = np.exp(-n_steps * self.dt / self.wander_tau)
+            self.v = f * self.v + self.wander * np.sqrt(1 - f * f) * self.rng.standard_normal()
         if self.noise > 0:
             # exact OU update over n_steps·dt (white noise when tau_c = 0)
             f = np.exp(-n_steps * self.dt / self.tau_c) if self.tau_c > 0 else 0.0
