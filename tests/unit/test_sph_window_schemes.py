@@ -34,6 +34,7 @@ import pytest
 import xarray as xr
 
 from hugomap import stages as ps
+from hugomap.analysis.stats import line_fit
 from hugomap.config import validate_config
 from hugomap.failures import FAILURES
 from hugomap.sph.window import SPHWindow
@@ -99,6 +100,11 @@ def test_mw_holds_D_and_finds_its_amplitude(window0, tmp_path):
     assert abs(_on_line(D, u)) < 0.01, (D, u)
     assert ds["control_u_out"].size >= 3  # it had to steer (more than the calm windows)
     assert float(ds["cpu_s"]) > 0 and ds["D"].attrs["units"] == "m s-1"
+    # the steady average's ω samples are kept, and they are the ones its front speed came from
+    t, om = ds["history_t"].values, ds["history_omega"].values
+    L = float(ds.attrs["window_length"])
+    assert om.size == t.size >= 16
+    assert L * line_fit(t, om)[0] == pytest.approx(float(ds["omega_drift"]), rel=1e-9)
 
 
 @pytest.mark.slow

@@ -448,6 +448,10 @@ def point_dataset(
         data["history_stage"] = xr.Variable(
             ("sample",), history["stage"], {"units": "1", "long_name": "0 load, 1 drive"}
         )
+        if "omega" in history:  # a window's steady average: its ω samples, for error studies
+            data["history_omega"] = xr.Variable(
+                ("sample",), history["omega"], {"units": "1", "long_name": "omega (front fraction)"}
+            )
     ds = xr.Dataset(data)
     ds.attrs.update(
         Conventions=CONVENTIONS,

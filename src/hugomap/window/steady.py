@@ -35,7 +35,7 @@ def steady_state(
     left_gap: float | None = None,
 ) -> tuple[dict, dict[str, np.ndarray]]:
     """Average the steady wave for ``duration`` (module docstring); returns the point's
-    values and the samples (t, front, x_left, x_right, sums, stage).
+    values and the samples (t, front, x_left, x_right, sums, stage, omega).
 
     A particle count that never changed over the average (the front moved less than one
     particle's worth, L/|q_sh − q_up|) gets that quantum's uncertainty instead of the fit's
@@ -61,7 +61,7 @@ def steady_state(
     h = {
         "t": t_a, "front": np.asarray(front), "stage": np.ones(n, dtype=np.int8),
         "x_left": np.full(n, g.x_lo), "x_right": np.full(n, g.x_hi),
-        "sums": np.asarray(sums_all),
+        "sums": np.asarray(sums_all), "omega": om,
     }  # fmt: skip
     L = g.length
     r = measure_point(
