@@ -175,8 +175,8 @@ def test_amw_slope_error_holds_for_a_wandering_front():
     pushed by acoustic waves) under small white ω noise: within one window the residuals
     look nearly white, so the AR(1) error misses the wander, and the slopes from window 3 on
     fall within 2 s_k of the true slope (known exactly: (u_in + D)/L) in 59 % of the
-    windows, not 95 %. AMW's stated error, at least the slopes' own scatter with its shifts undone
-    (``steered_out_scatter``), must cover at least 85 % (20 runs, 140 windows: the binomial
+    windows, not 95 %. AMW's stated error, at least the slopes' own scatter with its shifts
+    undone (``steered_out_scatter``), must cover at least 85 % (20 runs, 140 windows: the binomial
     3σ band around 95 % is ±5.5 %, and an error estimated from a few windows' differences
     is itself uncertain, as a t-distribution's tails are wider than a normal's; it covers
     87 %)."""

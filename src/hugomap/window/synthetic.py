@@ -13,8 +13,9 @@ with noise an Ornstein–Uhlenbeck process of standard deviation ``noise`` (in u
 i.e. of N/(A L (ρ1 − ρ0))) and correlation time ``tau_c``. The front itself may wander:
 ``wander`` adds to dx_f/dt an Ornstein–Uhlenbeck velocity of that standard deviation and
 correlation time ``wander_tau`` (an MD front pushed back and forth by acoustic waves), so
-its position drifts like a random walk on times longer than ``wander_tau``. With the normalisation of
-``methods.OmegaSignal`` (q_up = ρ0 A L, q_sh = ρ1 A L) ω = x_f/L + noise exactly.
+its position drifts like a random walk on times longer than ``wander_tau``. With the
+normalisation of ``methods.OmegaSignal`` (q_up = ρ0 A L, q_sh = ρ1 A L) ω = x_f/L + noise
+exactly.
 
 Exact answers: AMW (u_p held) must end in the frame u_in = −(c0 + s u_p); MW and the
 dichotomy (u_in held) at u_out = u_in + (−u_in − c0)/s. Units are arbitrary but consistent.
@@ -101,12 +102,15 @@ class SyntheticFront:
             self.x_f += (self.front_velocity() + self.v) * self.dt
             self.step += 1
         if self.wander > 0:
-            f = np.exp(-n_steps * self.dt / self.wander_tau)
-            self.v = f * self.v + self.wander * np.sqrt(1 - f * f) * self.rng.standard_normal()
+            self.v = self._ou(self.v, self.wander, self.wander_tau, n_steps * self.dt)
         if self.noise > 0:
-            # exact OU update over n_steps·dt (white noise when tau_c = 0)
-            f = np.exp(-n_steps * self.dt / self.tau_c) if self.tau_c > 0 else 0.0
-            self.e = f * self.e + self.noise * np.sqrt(1 - f * f) * self.rng.standard_normal()
+            self.e = self._ou(self.e, self.noise, self.tau_c, n_steps * self.dt)
+
+    def _ou(self, x: float, sd: float, tau: float, span: float) -> float:
+        """Exact Ornstein–Uhlenbeck update of x (standard deviation sd, correlation time
+        tau) over a time span; white noise when tau = 0."""
+        f = np.exp(-span / tau) if tau > 0 else 0.0
+        return f * x + sd * np.sqrt(1 - f * f) * self.rng.standard_normal()
 
     def galilean_shift(self, du: float) -> None:
         self.u_in += du
