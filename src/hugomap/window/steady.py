@@ -40,8 +40,8 @@ def steady_state(
     A particle count that never changed over the average (the front moved less than one
     particle's worth, L/|q_sh − q_up|) gets that quantum's uncertainty instead of the fit's
     0: two ends uniform within it, std quantum/√6 over the average. The slope's error is
-    the larger of the AR(1)-corrected one and its scatter over four spans
-    (``stats.slope_scatter``)."""
+    the larger of the AR(1)-corrected one and its scatter over four spans, with ω a bounded
+    signal (``stats.slope_scatter``)."""
     g = win.geom
     n = max(16, int(round(duration / (every * max(win.dt, 1e-300)))))
     t, front, sums_all, omega = [], [], [], []
@@ -54,7 +54,8 @@ def steady_state(
         sums_all.append(sums)
     t_a, om = np.asarray(t), np.asarray(omega)
     a, se, _ = CorrelatedSlope().fit(t_a, om)
-    wander = slope_scatter(t_a, om)  # ω wanders with the front (analysis.shock.measure_point)
+    # ω wiggles with the front about its drift, bounded in a held frame (stats.slope_scatter)
+    wander = slope_scatter(t_a, om, bounded=True)
     if np.isfinite(wander):
         se = max(float(se), wander)
     se = flat_omega_error(signal, t_a, om, se)
