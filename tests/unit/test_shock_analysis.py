@@ -295,3 +295,46 @@ def test_a_run_without_any_slab_is_too_few_samples_not_an_error():
                       residual_tol=0.01)  # fmt: skip
     assert r["status"] == "too_few_samples", r["diagnostic"]
     assert np.isnan(r["P"]) and np.isnan(r["Pyy"]) and np.isnan(r["shear_stress"])
+
+
+def _slope_scatter_ratios(kind: str, n_runs: int = 400) -> tuple[float, float]:
+    """RMS of slope_scatter (bounded, random-walk rule) over the true sd of the whole
+    span's least-squares slope, for ``n_runs`` independent signals of 400 samples over
+    T = 20: an Ornstein–Uhlenbeck wiggle (sd 1, correlation time 4 ≈ one of the four spans)
+    or a random walk (unit diffusion)."""
+    from hugomap.analysis.stats import line_fit, slope_scatter
+
+    rng = np.random.default_rng(7)
+    t = np.linspace(0.0, 20.0, 400)
+    dt = t[1] - t[0]
+    f = np.exp(-dt / 4.0)
+    y = np.empty((n_runs, t.size))
+    y[:, 0] = rng.standard_normal(n_runs)
+    for i in range(1, t.size):
+        step = rng.standard_normal(n_runs)
+        y[:, i] = (
+            f * y[:, i - 1] + np.sqrt(1 - f * f) * step
+            if kind == "ou"
+            else y[:, i - 1] + np.sqrt(dt) * step
+        )
+    sd = np.std([line_fit(t, yk)[0] for yk in y])
+    rms = [
+        np.sqrt(np.mean([slope_scatter(t, yk, bounded=b) ** 2 for yk in y])) / sd
+        for b in (True, False)
+    ]
+    return rms[0], rms[1]
+
+
+def test_slope_scatter_suits_each_kind_of_wander():
+    """Reference: the sd of the slope over 400 independent runs. A bounded wiggle's span
+    slopes shrink as 1/T, so std/n_sub is its error and the random-walk rule std/√n_sub
+    reads about 2× high; a random walk's span slopes average to the whole one's, so
+    std/√n_sub is its error and std/n_sub reads 2× low. The ±30 % band holds the estimator's
+    own spread over 400 runs (a few %) and the OU rule's bias at this correlation time
+    (measured 0.92)."""
+    bounded, walk = _slope_scatter_ratios("ou")
+    assert 0.7 < bounded < 1.3
+    assert walk > 1.6
+    bounded, walk = _slope_scatter_ratios("walk")
+    assert 0.7 < walk < 1.3
+    assert bounded < 0.6
