@@ -105,6 +105,12 @@ def test_mw_holds_D_and_finds_its_amplitude(window0, tmp_path):
     L = float(ds.attrs["window_length"])
     assert om.size == t.size >= 16
     assert L * line_fit(t, om)[0] == pytest.approx(float(ds["omega_drift"]), rel=1e-9)
+    # and so are the slab's u (relative to the upstream) and P_xx, whose means are the point's
+    u_s, P_s = ds["history_u_slab"].values, ds["history_P_slab"].values
+    assert u_s.size == t.size and np.isfinite(u_s).sum() >= 16
+    assert np.nanmean(u_s) == pytest.approx(u, rel=1e-9)
+    assert np.nanmean(P_s) == pytest.approx(float(ds["P"]), rel=1e-9)
+    assert ds["history_u_slab"].attrs["units"] == "m s-1"
 
 
 @pytest.mark.slow

@@ -350,6 +350,52 @@ def named_causes(
     return out
 
 
+def _slabs(
+    h: dict[str, np.ndarray], profile: Profile, gap: float, avg_length: float,
+    left_gap: float | None,
+) -> tuple[list[SlabState | None], list[SlabState | None], dict[str, list]]:  # fmt: skip
+    """Per sample, the slab state behind and ahead of the front and their (far, near) half
+    slabs (``measure_point`` gives the slabs' bounds); None where a slab is too narrow."""
+    xf = np.asarray(h["front"], dtype=float)
+    xl = np.asarray(h["x_left"], dtype=float)
+    xr = np.asarray(h["x_right"], dtype=float)
+    sums = np.asarray(h["sums"], dtype=float)
+    edges = bin_edges(profile, sums.shape[1] if sums.ndim == 3 else 0)
+    min_len = MIN_SLAB_BINS * profile.bin_width - 1e-9 * profile.bin_width
+    lg = gap if left_gap is None else left_gap
+    behind: list[SlabState | None] = []
+    ahead: list[SlabState | None] = []
+    halves: dict[str, list] = {"behind": [], "ahead": []}  # (far, near) half-slab states
+    for i in range(xf.size):
+        st = sa = hb = ha = None
+        if np.isfinite(xf[i]):
+            lo, hi = max(xl[i] + lg, xf[i] - gap - avg_length), xf[i] - gap
+            if hi - lo >= min_len:
+                st = slab_state(profile, sums[i], edges, lo, hi)
+                hb = slab_halves(profile, sums[i], edges, lo, hi)
+            a_lo, a_hi = xf[i] + gap, min(xr[i] - gap, xf[i] + gap + avg_length)
+            if a_hi - a_lo >= min_len:
+                sa = slab_state(profile, sums[i], edges, a_lo, a_hi)
+                ha = slab_halves(profile, sums[i], edges, a_lo, a_hi)
+        behind.append(st)
+        ahead.append(sa)
+        halves["behind"].append(hb)
+        halves["ahead"].append(ha)
+    return behind, ahead, halves
+
+
+def slab_series(
+    h: dict[str, np.ndarray], profile: Profile, key: str, gap: float, avg_length: float,
+    left_gap: float | None = None,
+) -> np.ndarray:  # fmt: skip
+    """Field ``key`` of the slab behind the front in each sample (the slab of
+    ``measure_point``; NaN where it is too narrow), in the solver's units: the series whose
+    block average is the point's value, kept in a point file so that its error rule can be
+    checked against replicas without re-running them."""
+    behind, _, _ = _slabs(h, profile, gap, avg_length, left_gap)
+    return np.array([np.nan if s is None else s[key] for s in behind], dtype=float)
+
+
 def measure_point(
     h: dict[str, np.ndarray],
     profile: Profile,
@@ -419,31 +465,8 @@ def measure_point(
     """
     t = np.asarray(h["t"], dtype=float)
     xf = np.asarray(h["front"], dtype=float)
-    xl = np.asarray(h["x_left"], dtype=float)
-    xr = np.asarray(h["x_right"], dtype=float)
-    sums = np.asarray(h["sums"], dtype=float)
     n = t.size
-    edges = bin_edges(profile, sums.shape[1] if sums.ndim == 3 else 0)
-    min_len = MIN_SLAB_BINS * profile.bin_width - 1e-9 * profile.bin_width
-    lg = gap if left_gap is None else left_gap
-    behind: list[SlabState | None] = []
-    ahead: list[SlabState | None] = []
-    halves: dict[str, list] = {"behind": [], "ahead": []}  # (far, near) half-slab states
-    for i in range(n):
-        st = sa = hb = ha = None
-        if np.isfinite(xf[i]):
-            lo, hi = max(xl[i] + lg, xf[i] - gap - avg_length), xf[i] - gap
-            if hi - lo >= min_len:
-                st = slab_state(profile, sums[i], edges, lo, hi)
-                hb = slab_halves(profile, sums[i], edges, lo, hi)
-            a_lo, a_hi = xf[i] + gap, min(xr[i] - gap, xf[i] + gap + avg_length)
-            if a_hi - a_lo >= min_len:
-                sa = slab_state(profile, sums[i], edges, a_lo, a_hi)
-                ha = slab_halves(profile, sums[i], edges, a_lo, a_hi)
-        behind.append(st)
-        ahead.append(sa)
-        halves["behind"].append(hb)
-        halves["ahead"].append(ha)
+    behind, ahead, halves = _slabs(h, profile, gap, avg_length, left_gap)
     # no slab in any sample: the fields every point has, NaN (status too_few_samples)
     keys = next((list(s) for s in behind + ahead if s is not None),
                 ["rho", "u", "P", "E", "Pyy", "Pzz", "T"])  # fmt: skip
@@ -569,7 +592,7 @@ def measure_point(
         out["diagnostic"] = (
             f"{n_ok} of {n} samples have a slab of at least {MIN_SLAB_BINS} bins behind the "
             f"front (median front {np.nanmedian(xf) if np.isfinite(xf).any() else np.nan:.4g},"
-            f" boundaries {np.median(xl):.4g} .. {np.median(xr):.4g}); needs "
+            f" boundaries {np.median(h['x_left']):.4g} .. {np.median(h['x_right']):.4g}); needs "
             f"{max(2 * n_blocks, n // 2)}"
         )
     else:

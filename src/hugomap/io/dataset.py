@@ -452,6 +452,13 @@ def point_dataset(
             data["history_omega"] = xr.Variable(
                 ("sample",), history["omega"], {"units": "1", "long_name": "omega (front fraction)"}
             )
+        slab = {"u_slab": ("u_p_measured", "velocity of the slab behind, relative to the upstream"),
+                "P_slab": ("P", "P_xx of the slab behind")}  # fmt: skip
+        for k, (unit_of, text) in slab.items():  # the series a point's block errors come from
+            if k in history:
+                data["history_" + k] = xr.Variable(
+                    ("sample",), history[k], {"units": point_vars[unit_of][0], "long_name": text}
+                )
     ds = xr.Dataset(data)
     ds.attrs.update(
         Conventions=CONVENTIONS,

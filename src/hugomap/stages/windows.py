@@ -40,7 +40,11 @@ def window_point(
         more.update(profile_vars(mean_profile(h, profile), b.units))
     if control is not None and control.t:
         more.update(control_vars(control, b.units))
-    hist = None if h is None else {k: h[k] for k in ("t", "front", "stage", "omega") if k in h}
+    hist = (
+        None
+        if h is None
+        else {k: h[k] for k in ("t", "front", "stage", "omega", "u_slab", "P_slab") if k in h}
+    )
     attrs = {} if win is None else {"u_in": win.u_in, "u_out": win.u_out,
                                     "window_length": win.geom.length}  # fmt: skip
     return write_point(out, b, scene, scheme, values, {} if pole is None else pole.as_dict(),

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..analysis.shock import bin_edges, measure_point, track_front
+from ..analysis.shock import bin_edges, measure_point, slab_series, track_front
 from ..analysis.stats import CorrelatedSlope, slope_scatter
 from ..states import Pole, Profile
 from .methods import OmegaSignal, flat_omega_error
@@ -35,7 +35,8 @@ def steady_state(
     left_gap: float | None = None,
 ) -> tuple[dict, dict[str, np.ndarray]]:
     """Average the steady wave for ``duration`` (module docstring); returns the point's
-    values and the samples (t, front, x_left, x_right, sums, stage, omega).
+    values and the samples (t, front, x_left, x_right, sums, stage, omega, and the slab
+    behind's u relative to the upstream and P_xx: u_slab, P_slab).
 
     A particle count that never changed over the average (the front moved less than one
     particle's worth, L/|q_sh − q_up|) gets that quantum's uncertainty instead of the fit's
@@ -71,6 +72,11 @@ def steady_state(
         front_speed=(L * a, L * se),
     )  # fmt: skip
     r["omega_drift"], r["omega_drift_err"] = L * a, L * se
+    # the slab's velocity (relative to the upstream) and P_xx per sample: their block
+    # errors, checked against replicas, need the series, not only the mean
+    slab = dict(gap=gap, avg_length=avg_length, left_gap=left_gap)
+    h["u_slab"] = slab_series(h, profile, "u", **slab) - win.u_in
+    h["P_slab"] = slab_series(h, profile, "P", **slab)
     r["u_p_set"] = r.pop("u_p")
     r.pop("u_p_err")
     return r, h
