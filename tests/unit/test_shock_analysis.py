@@ -338,3 +338,21 @@ def test_slope_scatter_suits_each_kind_of_wander():
     bounded, walk = _slope_scatter_ratios("walk")
     assert 0.7 < walk < 1.3
     assert bounded < 0.6
+
+
+def test_slab_series_is_the_series_the_point_averages():
+    """``slab_series`` gives, per sample, the slab behind that ``measure_point`` averages: its
+    mean u (relative to the upstream at rest here) is ``u_p_measured`` and its mean P is P,
+    to rounding; a window point keeps these series for error studies against replicas."""
+    from hugomap.analysis.shock import measure_point, slab_series
+
+    h, pole = _toy_run(0.0, 0.002, flow=-0.01)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                      residual_tol=0.01)  # fmt: skip
+    u = slab_series(h, _ToyProfile(), "u", gap=3.0, avg_length=20.0)
+    P = slab_series(h, _ToyProfile(), "P", gap=3.0, avg_length=20.0)
+    assert u.shape == P.shape == np.asarray(h["t"]).shape
+    assert np.isfinite(u).sum() == r["n_samples"]
+    assert np.nanmean(u) == pytest.approx(r["u_p_measured"], rel=1e-12)
+    assert np.nanmean(P) == pytest.approx(r["P"], rel=1e-12)
+    assert np.nanstd(u) > 0  # the samples, not a constant
