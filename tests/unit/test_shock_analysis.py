@@ -349,8 +349,7 @@ def test_slab_series_is_the_series_the_point_averages():
     h, pole = _toy_run(0.0, 0.002, flow=-0.01)
     r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
                       residual_tol=0.01)  # fmt: skip
-    u = slab_series(h, _ToyProfile(), "u", gap=3.0, avg_length=20.0)
-    P = slab_series(h, _ToyProfile(), "P", gap=3.0, avg_length=20.0)
+    u, P = slab_series(h, _ToyProfile(), ("u", "P"), gap=3.0, avg_length=20.0).values()
     assert u.shape == P.shape == np.asarray(h["t"]).shape
     assert np.isfinite(u).sum() == r["n_samples"]
     assert np.nanmean(u) == pytest.approx(r["u_p_measured"], rel=1e-12)

@@ -384,16 +384,21 @@ def _slabs(
     return behind, ahead, halves
 
 
+def _field(states: list[SlabState | None], k: str) -> np.ndarray:
+    """Field k of per-sample slab states, NaN where a sample has no slab."""
+    return np.array([np.nan if s is None else s[k] for s in states], dtype=float)
+
+
 def slab_series(
-    h: dict[str, np.ndarray], profile: Profile, key: str, gap: float, avg_length: float,
-    left_gap: float | None = None,
-) -> np.ndarray:  # fmt: skip
-    """Field ``key`` of the slab behind the front in each sample (the slab of
+    h: dict[str, np.ndarray], profile: Profile, keys: tuple[str, ...], gap: float,
+    avg_length: float, left_gap: float | None = None,
+) -> dict[str, np.ndarray]:  # fmt: skip
+    """Fields ``keys`` of the slab behind the front in each sample (the slab of
     ``measure_point``; NaN where it is too narrow), in the solver's units: the series whose
-    block average is the point's value, kept in a point file so that its error rule can be
-    checked against replicas without re-running them."""
+    block averages are the point's values, kept in a point file so that their error rule
+    can be checked against replicas without re-running them. One pass over the samples."""
     behind, _, _ = _slabs(h, profile, gap, avg_length, left_gap)
-    return np.array([np.nan if s is None else s[key] for s in behind], dtype=float)
+    return {k: _field(behind, k) for k in keys}
 
 
 def measure_point(
@@ -471,9 +476,6 @@ def measure_point(
     keys = next((list(s) for s in behind + ahead if s is not None),
                 ["rho", "u", "P", "E", "Pyy", "Pzz", "T"])  # fmt: skip
 
-    def series(states: list[SlabState | None], k: str) -> np.ndarray:
-        return np.array([np.nan if s is None else s[k] for s in states], dtype=float)
-
     spread: dict[str, tuple[float, float]] = {}  # behind: (near − far, late − early) beyond noise
 
     def mean_err(side: str, k: str) -> tuple[float, float]:
@@ -481,7 +483,7 @@ def measure_point(
         non-uniformity (near half against far half) and drift (second half of the samples
         against the first), each where it exceeds the noise (``excess_spread``)."""
         states = behind if side == "behind" else ahead
-        y = series(states, k)
+        y = _field(states, k)
         m, e = block_average(y, n_blocks)
         pairs = [(np.nan, np.nan) if h is None else (h[0][k], h[1][k]) for h in halves[side]]
         far, near = (
@@ -572,7 +574,7 @@ def measure_point(
     out.update({f"residual_{k}": v for k, v in res.items()})
     res_err = jump_residual_errors(vals, errs)
     out.update({f"residual_{k}_err": v for k, v in res_err.items()})
-    n_ok = int(np.isfinite(series(behind, "rho")).sum())
+    n_ok = int(np.isfinite(_field(behind, "rho")).sum())
     out["n_samples"] = n_ok
     finite = all(np.isfinite(v) for v in (D, u_p, rho, P, E))
     enough = n_ok >= max(2 * n_blocks, n // 2)

@@ -74,9 +74,8 @@ def steady_state(
     r["omega_drift"], r["omega_drift_err"] = L * a, L * se
     # the slab's velocity (relative to the upstream) and P_xx per sample: their block
     # errors, checked against replicas, need the series, not only the mean
-    slab = dict(gap=gap, avg_length=avg_length, left_gap=left_gap)
-    h["u_slab"] = slab_series(h, profile, "u", **slab) - win.u_in
-    h["P_slab"] = slab_series(h, profile, "P", **slab)
+    slab = slab_series(h, profile, ("u", "P"), gap, avg_length, left_gap)
+    h["u_slab"], h["P_slab"] = slab["u"] - win.u_in, slab["P"]
     r["u_p_set"] = r.pop("u_p")
     r.pop("u_p_err")
     return r, h
