@@ -68,12 +68,13 @@ def _base_on_axis(spec: Mapping, axis: str, base: Mapping) -> bool:
 
 
 def _reference_curve(ds: xr.Dataset) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """The reference Hugoniot of an aggregate, sorted by u_p: (u_p, {D, P, D_err, P_err})."""
+    """The reference Hugoniot of an aggregate, sorted by u_p: (u_p, {D, P, D_err, P_err,
+    u_p_err}); missing errors are 0."""
     if not all(f"ref_{k}" in ds for k in ("u_p", "D", "P")):
         return np.empty(0), {}
     u = ds["ref_u_p"].values.astype(float)
     cols = {k: ds[f"ref_{k}"].values.astype(float) for k in ("D", "P")}
-    for k in ("D", "P"):
+    for k in ("D", "P", "u_p"):
         e = f"ref_{k}_err"
         cols[k + "_err"] = ds[e].values.astype(float) if e in ds else np.zeros_like(u)
     ok = np.isfinite(u) & (u > 0) & np.isfinite(cols["D"]) & np.isfinite(cols["P"])
@@ -88,27 +89,65 @@ def _reference_name(ds: xr.Dataset) -> str:
 
 
 def reference_at(u: float, ru: np.ndarray, ref: Mapping[str, np.ndarray]) -> dict[str, float]:
-    """The reference Hugoniot at particle velocity ``u``: D, P and their errors (NaN outside
-    [ru[0], ru[-1]]; ``ru`` sorted, ``ref`` as ``_reference_curve`` returns it).
+    """The reference Hugoniot at particle velocity ``u``: D, P, their errors at fixed u and
+    their slopes dD/du, dP/du (NaN outside [ru[0], ru[-1]]; ``ru`` sorted, ``ref`` as
+    ``_reference_curve`` returns it).
 
     D is linear in u between the bracketing points a, b (D(u) is nearly straight). P lies on
     the pole's Rayleigh line, P = P0 + rho0 D(u) u, with the pole from the same two points
-    (P_i - P0 = rho0 D_i u_i at each: rho0 = (P_b - P_a)/(D_b u_b - D_a u_a)). Interpolating
-    P itself linearly would miss its curvature (P ~ rho0 (c0 + s u) u) by about
-    rho0 s (u - u_a)(u_b - u): 0.25-0.4 % of P between the LJ reference points, 0.4 % at
-    100 m/s on an 83-m/s copper grid. Errors: interpolated linearly."""
-    nan = {"D": math.nan, "P": math.nan, "D_err": math.nan, "P_err": math.nan}
+    (P_i - P0 = rho0 D_i u_i at each: rho0 = (P_b - P_a)/(D_b u_b - D_a u_a)), so dP/du =
+    rho0 (D + u dD/du). Interpolating P itself linearly would miss its curvature
+    (P ~ rho0 (c0 + s u) u) by about rho0 s (u - u_a)(u_b - u): 0.25-0.4 % of P between the
+    LJ reference points, 0.4 % at 100 m/s on an 83-m/s copper grid.
+
+    Errors at fixed u: a reference point's u and D errors are one error (equilibrium MD
+    derives both from its P at a fixed density, σ_u/u = σ_D/D: ``md.reference``), which
+    moves the point along the curve, so at fixed u its D moves by σ_D − (dD/du) σ_u
+    (for the LJ liquid 0.5-0.8 of σ_D; an EOS's D(u) has σ_u = 0 and keeps σ_D); the two
+    bracketing points' errors are independent (separate runs) and weigh in as the
+    interpolation weighs them, in quadrature; P moves by rho0 u times D's (the points stay
+    on the pole's Rayleigh line). P's error as stated, at fixed density, was 3-4 times the
+    seeds' scatter of window points' P about the reference at their u_p."""
+    keys = ("D", "P", "D_err", "P_err", "D_slope", "P_slope")
+    nan = dict.fromkeys(keys, math.nan)
     if ru.size < 2 or not (ru[0] <= u <= ru[-1]):
         return nan
     b = int(min(max(np.searchsorted(ru, u), 1), ru.size - 1))
     a = b - 1
     w = (u - ru[a]) / (ru[b] - ru[a])
-    out = {k: float((1.0 - w) * ref[k][a] + w * ref[k][b]) for k in ("D", "P", "D_err", "P_err")}
+    out = {k: float((1.0 - w) * ref[k][a] + w * ref[k][b]) for k in ("D", "P", "P_err")}
+    slope = float((ref["D"][b] - ref["D"][a]) / (ru[b] - ru[a]))
+    u_err = ref.get("u_p_err", np.zeros_like(ru))
+    d_fixed = [abs(ref["D_err"][i] - slope * u_err[i]) for i in (a, b)]
+    out["D_err"] = float(np.hypot((1.0 - w) * d_fixed[0], w * d_fixed[1]))
+    out["D_slope"] = slope
+    out["P_slope"] = float((ref["P"][b] - ref["P"][a]) / (ru[b] - ru[a]))
     flux_a, flux_b = ref["D"][a] * ru[a], ref["D"][b] * ru[b]
     if flux_b != flux_a:
         rho0 = (ref["P"][b] - ref["P"][a]) / (flux_b - flux_a)
         out["P"] = float(ref["P"][a] + rho0 * (out["D"] * u - flux_a))
+        out["P_slope"] = float(rho0 * (out["D"] + u * slope))
+        out["P_err"] = float(abs(rho0 * u) * out["D_err"])
     return out
+
+
+def reference_deviation(
+    x: float, x_err: float, at: Mapping[str, float], q: str, u_err: float = 0.0,
+    corr: float = 0.0,
+) -> tuple[float, float]:  # fmt: skip
+    """A point's relative deviation from the reference at its u_p, e = x/x_ref(u) − 1 for
+    q = "D" or "P", and its standard error: the point's σ_x, the reference's at fixed u
+    (``reference_at``) and the point's u_p error through the reference's slope, that one
+    correlated with σ_x by ``corr`` (a window's slab: its u and P move together),
+        s² = (σ_x/x_r)² + (x σ_r/x_r²)² + (x x_r' σ_u/x_r²)² − 2 corr (σ_x/x_r)(x x_r' σ_u/x_r²).
+    NaN where the point or the reference has no value."""
+    xr_, xre, slope = at.get(q, math.nan), at.get(q + "_err", math.nan), at.get(q + "_slope", 0.0)
+    xre = xre if math.isfinite(xre) else 0.0
+    du = x * slope * u_err / xr_**2 if math.isfinite(u_err) and u_err > 0 else 0.0
+    c = corr if math.isfinite(corr) else 0.0
+    a = x_err / xr_
+    var = a * a + (x * xre / xr_**2) ** 2 + du * du - 2.0 * c * a * du
+    return x / xr_ - 1.0, math.sqrt(max(var, 0.0))
 
 
 def case_c0(ds: xr.Dataset, scene: Mapping) -> float:
@@ -159,7 +198,7 @@ def _axis_unit(scene: Mapping, dotted: str) -> str:
 
 POINT_COLUMNS: dict[str, tuple[str, str]] = {
     "u_p_over_c0": ("1", "nominal piston velocity over the case's c0 (attrs cases)"),
-    "u_eval_over_c0": ("1", "u_p the error is taken at (MW: the amplitude it reached) over c0"),
+    "u_eval_over_c0": ("1", "u_p the error is taken at (u_p_jump: a window's slab) over c0"),
     "D_over_c0": ("1", "shock velocity over c0"),
     "err_D": ("1", "relative error of D from the reference Hugoniot at u_eval: D/D_ref - 1"),
     "err_D_err": ("1", "standard error of err_D (the point's and the reference's)"),
@@ -199,9 +238,10 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
     ``cfg``: the validated config (campaign expanded); ``aggregates``: scene → path of its
     ``results/hugoniot/<scene>.nc``. Errors are relative to the reference Hugoniot stored in
     the aggregate (``ref_*``: LJ the equilibrium-MD Hugoniot, solid copper D = c0 + s u_p,
-    porous copper McQueen's full compaction), taken at the point's
-    u_p (MW: at ``u_p_set``, the amplitude it reached) by ``reference_at`` (D linear, P on the
-    Rayleigh line), NaN outside the reference's range.
+    porous copper McQueen's full compaction), taken at the u_p the point's jump was taken at
+    (``u_p_jump``: the piston's velocity, a window's slab; older files: the nominal u_p, MW's
+    ``u_p_set``) by ``reference_at`` (D linear, P on the Rayleigh line), NaN outside the
+    reference's range, with errors from ``reference_deviation``.
     A failed point keeps its status, failure class and cause, and no value.
     """
     from .failures import FAILURES
@@ -243,9 +283,13 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
                 def val(k: str, _p=p, _i=i) -> float:
                     return float(_p[k].values[_i]) if k in _p else math.nan
 
-                u_eval = u
-                if scheme == "mw" and math.isfinite(val("u_p_set")):
-                    u_eval = val("u_p_set")
+                # the u_p the point's jump is taken at (a window's slab); files without it:
+                # the boundary's (MW: the amplitude it reached)
+                u_eval, u_err, corr = val("u_p_jump"), val("u_p_jump_err"), val("u_p_P_corr")
+                if not math.isfinite(u_eval):
+                    u_eval, u_err, corr = u, 0.0, 0.0
+                    if scheme == "mw" and math.isfinite(val("u_p_set")):
+                        u_eval = val("u_p_set")
                 row: dict[str, Any] = {
                     "case": v.case, "study": v.study, "variant": v.label, "scene": v.scene,
                     "scheme": str(scheme), "axis": v.axis,
@@ -262,11 +306,9 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
                 at = reference_at(u_eval, ru, ref) if ref else {}
                 for q in ("D", "P"):
                     x, xe = (val(q), val(q + "_err")) if usable else (math.nan, math.nan)
-                    xr_, xre = at.get(q, math.nan), at.get(q + "_err", math.nan)
-                    row[f"err_{q}"] = x / xr_ - 1.0
-                    xre = xre if math.isfinite(xre) else 0.0
-                    xe = xe if math.isfinite(xe) else math.nan
-                    row[f"err_{q}_err"] = math.hypot(xe / xr_, x * xre / xr_**2)
+                    row[f"err_{q}"], row[f"err_{q}_err"] = reference_deviation(
+                        x, xe, at, q, u_err, corr if q == "P" else 0.0
+                    )
                 row["D_over_c0"] = (val("D") if usable else math.nan) / c0
                 for k in CLOSURES:
                     for e in ("", "_err"):

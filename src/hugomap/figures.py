@@ -59,8 +59,9 @@ def hugoniot_figures(
     points filled, not-converged points hollow (both with their error bars), failed points
     (no value) named with their status in the legend and, on D–u_p, marked × on the bottom
     edge at their u_p. A scheme with nothing to draw has no legend entry. D–u_p is drawn at
-    the exact u_p (the piston's speed, or u_out − u_in set by a window); where u_p was also
-    measured behind the front, a thin bar at the point's D spans that measurement ± 1 s.e."""
+    the jump's u_p (``u_p_jump``: the piston's speed, a window's slab ± 1 s.e.; older files:
+    the u_p coordinate or a window's u_out − u_in); where u_p was also measured behind a
+    piston's front, a thin bar at the point's D spans that measurement ± 1 s.e."""
     from matplotlib.transforms import blended_transform_factory
 
     with xr.open_dataset(agg, engine="netcdf4") as ds:
@@ -79,12 +80,18 @@ def hugoniot_figures(
             x, y = d[xv].values, d[yv].values
             xe, ye = d[xv + "_err"].values, d[yv + "_err"].values
             if xv == "u_p_measured":
-                # u_p is exact: the piston's speed (the u_p coordinate), or u_out − u_in set
-                # by a window; the measured jump is a check, a few % low from its slabs.
-                u_set = d["u_p_set"].values if "u_p_set" in d else np.full(x.shape, np.nan)
+                # at the jump's u_p: the piston's speed (exact), a window's slab (measured);
+                # files without it: the u_p coordinate, or u_out − u_in set by a window
+                nan = np.full(x.shape, np.nan)
+                u_set = d["u_p_set"].values if "u_p_set" in d else nan
+                u_jump = d["u_p_jump"].values if "u_p_jump" in d else nan
+                u_jump_err = d["u_p_jump_err"].values if "u_p_jump_err" in d else nan
                 um, ume = x * fx, xe * fx
                 x = np.where(np.isfinite(u_set), u_set, d["u_p"].values)
-                xe = np.zeros_like(x)
+                x = np.where(np.isfinite(u_jump), u_jump, x)
+                xe = np.where(np.isfinite(u_jump_err), u_jump_err, 0.0)
+                # the measured slab as a check only where the jump was not taken at it
+                um = np.where(np.isclose(u_jump * fx, um, rtol=1e-12, atol=0.0), np.nan, um)
             x, xe, y, ye = x * fx, xe * fx, y * fy, ye * fy
             drawn = np.isfinite(x) & np.isfinite(y)
             ok = drawn & (status == "ok")

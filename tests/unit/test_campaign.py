@@ -295,7 +295,8 @@ def test_default_row_only_where_the_axis_keeps_the_base_settings(tmp_path):
 def test_reference_at_follows_the_rayleigh_line():
     """On a linear Us-up Hugoniot with a pole P0 (D = c0 + s u, P = P0 + rho0 D u) sampled
     every 100 m/s, reference_at is exact between the points (D linear; P from the pole the
-    two bracketing points define), where interpolating P linearly errs by
+    two bracketing points define; D's error from the two points' in quadrature), where
+    interpolating P linearly errs by
     rho0 s (u - u_a)(u_b - u); NaN outside the sampled range."""
     rho0, p0 = 8930.0, 1.0e8
     ru = np.arange(100.0, 1001.0, 100.0)
@@ -305,8 +306,64 @@ def test_reference_at_follows_the_rayleigh_line():
         at = cp.reference_at(u, ru, ref)
         assert at["D"] == pytest.approx(C0 + S * u, rel=1e-13)
         assert at["P"] == pytest.approx(p0 + rho0 * (C0 + S * u) * u, rel=1e-13)
-        assert at["D_err"] == pytest.approx(0.01 * (C0 + S * u), rel=1e-13)
+        # independent points' errors (no u error: an EOS's) weigh in quadrature
+        b = min(max(int(np.searchsorted(ru, u)), 1), ru.size - 1)
+        w = (u - ru[b - 1]) / 100.0
+        want = math.hypot((1 - w) * ref["D_err"][b - 1], w * ref["D_err"][b])
+        assert at["D_err"] == pytest.approx(want, rel=1e-13)
     linear = float(np.interp(150.0, ru, ref["P"]))
     assert linear - cp.reference_at(150.0, ru, ref)["P"] == pytest.approx(rho0 * S * 50 * 50)
     assert all(math.isnan(v) for v in cp.reference_at(50.0, ru, ref).values())
     assert all(math.isnan(v) for v in cp.reference_at(1001.0, ru, ref).values())
+
+
+def test_reference_errors_at_fixed_u_follow_the_points_along_their_rayleigh_rays():
+    """Reference: 4000 draws of an equilibrium-MD-like reference, its points at fixed
+    densities on D = c0 + s u with P errors σ_P, u and D recomputed from each drawn P by the
+    jump conditions (u = √((P − P0)(V0 − V)), D = V0 √((P − P0)/(V0 − V))). reference_at's
+    D and P errors at fixed u match the draws' sd at that u within 6 % (the sd of a sd over
+    4000 draws is 1.1 %; the rest is first order against the draws' curvature), while the
+    errors as stated (at fixed density, interpolated linearly) are about twice as large."""
+    c0, s, rho0, P0, sP = 4.0, 1.5, 0.8, 6.0, 0.05
+    u_true = np.array([0.8, 1.2, 1.7, 2.2])
+    D_true = c0 + s * u_true
+    P_true = P0 + rho0 * D_true * u_true
+    V0, V = 1 / rho0, (1 / rho0) * (1 - u_true / D_true)
+
+    def jump(P):
+        return np.sqrt((P - P0) * (V0 - V)), V0 * np.sqrt((P - P0) / (V0 - V))
+
+    rel = 0.5 * sP / (P_true - P0)
+    stated = {"D": D_true, "P": P_true, "D_err": D_true * rel, "P_err": np.full(4, sP),
+              "u_p_err": u_true * rel}  # fmt: skip
+    rng = np.random.default_rng(11)
+    draws = {"D": [], "P": []}
+    for _ in range(4000):
+        P = P_true + sP * rng.standard_normal(4)
+        u, D = jump(P)
+        at = cp.reference_at(1.45, u, {"D": D, "P": P, "D_err": D * 0, "P_err": P * 0})
+        draws["D"].append(at["D"])
+        draws["P"].append(at["P"])
+    at = cp.reference_at(1.45, u_true, stated)
+    for q in ("D", "P"):
+        assert at[q + "_err"] == pytest.approx(np.std(draws[q]), rel=0.06), q
+    assert at["D_slope"] == pytest.approx(s, rel=1e-12)
+    assert at["P_slope"] == pytest.approx(rho0 * (c0 + 2 * s * 1.45), rel=1e-12)
+    assert 1.8 < float(np.interp(1.45, u_true, stated["D_err"])) / at["D_err"] < 2.4
+
+
+def test_reference_deviation_counts_the_u_error_and_its_correlation():
+    """e = x/x_ref(u) − 1 with s² = (σ_x/x_r)² + (x σ_r/x_r²)² + (x x_r' σ_u/x_r²)²
+    − 2 corr (σ_x/x_r)(x x_r' σ_u/x_r²): a point that slides along the reference (P and u
+    errors fully correlated, σ_P = x_r' σ_u) keeps only the reference's error; with
+    independent errors the three add in quadrature."""
+    at = {"P": 10.0, "P_err": 0.02, "P_slope": 8.0}
+    e, s_ = cp.reference_deviation(10.0, 0.08, at, "P", u_err=0.01, corr=1.0)
+    assert e == 0.0 and s_ == pytest.approx(0.002, rel=1e-9)
+    e, s_ = cp.reference_deviation(10.2, 0.08, at, "P", u_err=0.01, corr=0.0)
+    assert e == pytest.approx(0.02)
+    assert s_ == pytest.approx(math.sqrt(0.008**2 + 0.00204**2 + 0.00816**2), rel=1e-9)
+    assert cp.reference_deviation(10.0, 0.08, at, "P") == (
+        0.0,
+        pytest.approx(math.hypot(0.008, 0.002)),
+    )

@@ -87,25 +87,31 @@ class _ToyProfile:
 
 
 def _toy_run(P_bias: float, noise: float, wander: float = 0.0, seed: int = 3, flow: float = 0.0,
-             ahead: tuple[float, float, float, float] = (0.0, 1.0, 1.0, 0.0)):  # fmt: skip
+             ahead: tuple[float, float, float, float] = (0.0, 1.0, 1.0, 0.0),
+             exact_at_slab: bool = False, sway: float = 0.0):  # fmt: skip
     """Samples of a steady front at D into the pole (ρ0 1, P0 1, E0 0) at rest, u_p 1, the
     state behind exact except P × (1 + P_bias), every field with white noise of relative
     size ``noise``; the front position may wander by ``wander`` (one sine over the run); the
-    slab behind may flow at ``flow`` relative to the boundary behind it (u = u_p + flow);
-    the material ahead is at (u, ρ, P, E) = ``ahead`` (default the pole at rest)."""
+    slab behind may flow at ``flow`` relative to the boundary behind it (u = u_p + flow),
+    its state exact for u_p (default) or for its own velocity (``exact_at_slab``: the
+    window's case, the boundary holds the slab only on average), and may sway along the
+    Rayleigh line, u × (1 + ``sway`` sin(2π t/3.3)) with ρ, P, E exact at each instant (an
+    acoustic ring moving u and P together); the material ahead is at (u, ρ, P, E) =
+    ``ahead`` (default the pole at rest)."""
     from hugomap.states import Pole
 
     rng = np.random.default_rng(seed)
     D, u_p = 3.0, 1.0
-    rho, P, E = _behind(1.0, 1.0, 0.0, 0.0, D, u_p)
     t = np.linspace(0.0, 20.0, 200)
     xf = 10.0 + D * t + wander * np.sin(2 * np.pi * t / t[-1])
     edges = np.arange(101)
     sums = np.empty((t.size, 100, 5))
     for i, x in enumerate(xf):
+        u_i = (u_p + flow) * (1.0 + sway * np.sin(2 * np.pi * t[i] / 3.3))
+        rho, P, E = _behind(1.0, 1.0, 0.0, 0.0, D, u_i if exact_at_slab else u_p)
         behind = (edges[1:] <= x)[:, None]
         ahead_state = np.array([30.0, *ahead])
-        behind_state = np.array([30.0, u_p + flow, rho, P * (1 + P_bias), E])
+        behind_state = np.array([30.0, u_i, rho, P * (1 + P_bias), E])
         s = np.where(behind, behind_state, ahead_state)
         s[:, 2:] *= 1 + noise * rng.standard_normal((100, 3))
         s[:, 1] += noise * rng.standard_normal(100)
@@ -168,6 +174,99 @@ def test_a_slab_that_still_flows_is_not_ok_and_the_point_says_why():
     r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
                       residual_tol=0.01)  # fmt: skip
     assert r["status"] == "ok", r["diagnostic"]
+
+
+def test_a_window_takes_the_jump_at_its_slab_and_the_flow_is_a_diagnostic():
+    """A window's outflow holds the shocked material only on average: a slab moving at
+    0.98 of the boundary's u_p, its state exact for its own velocity, closes its jumps at
+    that velocity (``u_p_from = "slab"``: ok, ``u_p_jump`` 0.98, the −2 % flow reported but
+    not a closure) and fails at the boundary's (momentum +2 %, the slab named not at
+    rest)."""
+    from hugomap.analysis.shock import measure_point
+
+    h, pole = _toy_run(0.0, 0.0005, flow=-0.02, exact_at_slab=True)
+    kw = dict(gap=3.0, avg_length=20.0, residual_tol=0.01)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, **kw, u_p_from="slab")
+    assert r["status"] == "ok", r["diagnostic"]
+    assert r["u_p_jump"] == pytest.approx(0.98, abs=1e-3)
+    assert r["u_p_jump_err"] == pytest.approx(r["u_p_measured_err"])
+    assert r["residual_flow"] == pytest.approx(-0.02, abs=1e-3)
+    assert abs(r["residual_momentum"]) < 1e-3 and r["P_flow_err"] == 0.0
+    assert r["P_rh"] == pytest.approx(1.0 + 3.0 * 0.98, rel=1e-3)
+    b = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, **kw)
+    assert b["status"] == "not_converged" and b["u_p_jump"] == 1.0
+    assert b["residual_momentum"] == pytest.approx(-0.02, abs=2e-3)
+    assert b["diagnostic"].startswith("slab not at rest")
+    with pytest.raises(ValueError, match="u_p_from"):
+        measure_point(h, _ToyProfile(), pole, 1.0, 0.0, **kw, u_p_from="outflow")
+
+
+def test_a_slab_swaying_along_its_rayleigh_line_has_correlated_u_and_P_errors():
+    """The slab's state slides along the Rayleigh line (u ± 1 %, P = P0 + ρ0 D u at each
+    instant, a ring of period 3.3 over a 20-τ run): its u and P errors are correlated
+    (u_p_P_corr > 0.95) and the momentum residual at the slab's u, exact on average, gets
+    an error a fraction of the one that treats them as independent; that error still
+    covers the residual."""
+    from hugomap.analysis.shock import jump_residual_errors, measure_point
+
+    h, pole = _toy_run(0.0, 0.0002, sway=0.01, exact_at_slab=True)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                      residual_tol=0.01, u_p_from="slab")  # fmt: skip
+    assert r["u_p_P_corr"] > 0.95
+    vals = dict(rho1=1.0, P1=1.0, E1=0.0, u1=0.0, D=r["D"], u=r["u_p_jump"], rho=r["rho"],
+                P=r["P"], E=r["E"])  # fmt: skip
+    errs = {"D": r["D_err"], "u": r["u_p_jump_err"], "rho": r["rho_err"], "P": r["P_err"],
+            "E": r["E_err"]}  # fmt: skip
+    independent = jump_residual_errors(vals, errs)["momentum"]
+    assert r["residual_momentum_err"] < 0.5 * independent
+    assert abs(r["residual_momentum"]) <= 3.0 * r["residual_momentum_err"] + 1e-4
+
+
+def test_correlated_errors_propagate_as_a_monte_carlo_says():
+    """Reference: 40 000 draws of the slab's (u, P) from a bivariate normal (σ_u 1 %, σ_P
+    0.5 %, correlation ±0.8) through ``jump_residuals``; the first-order error with the
+    covariance matches the draws' sd of the momentum residual within 3 % (the sd of a sd
+    over 40 000 draws is 0.35 %; the rest is the residual's curvature in u)."""
+    vals = dict(rho1=0.8, P1=5.9, E1=-0.9, D=10.7, u=2.0, u1=0.0)
+    vals.update(zip(("rho", "P", "E"), _behind(0.8, 5.9, -0.9, 0.0, 10.7, 2.0), strict=True))
+    su, sP = 0.02, 0.005 * vals["P"]
+    rng = np.random.default_rng(7)
+    for corr in (0.8, -0.8):
+        cov = np.array([[su**2, corr * su * sP], [corr * su * sP, sP**2]])
+        du, dP = rng.multivariate_normal([0.0, 0.0], cov, 40_000).T
+        r = [jump_residuals(**{**vals, "u": vals["u"] + a, "P": vals["P"] + b})["momentum"]
+             for a, b in zip(du, dP, strict=True)]  # fmt: skip
+        got = jump_residual_errors(vals, {"u": su, "P": sP}, cov={("u", "P"): cov[0, 1]})
+        assert got["momentum"] == pytest.approx(np.std(r), rel=0.03)
+    # no covariance: the independent sum, as before
+    plain = jump_residual_errors(vals, {"u": su, "P": sP})
+    assert plain == jump_residual_errors(vals, {"u": su, "P": sP}, cov={("u", "P"): 0.0})
+
+
+def test_block_covariance_is_the_covariance_of_the_means():
+    """cov(x, x) is the square of ``block_average``'s error; y = −2x + noise gives a
+    covariance −2 of it; over 2000 pairs of AR(1) series (correlation 0.7 between them)
+    the block covariance's mean is the true covariance of the two means within 10 %
+    (reference: the covariance of the means over the 2000 pairs)."""
+    from hugomap.analysis.stats import block_average, block_covariance
+
+    rng = np.random.default_rng(5)
+    x = rng.standard_normal(400)
+    assert block_covariance(x, x) == pytest.approx(block_average(x)[1] ** 2, rel=1e-12)
+    y = -2.0 * x
+    assert block_covariance(x, y) == pytest.approx(-2.0 * block_average(x)[1] ** 2, rel=1e-12)
+    assert np.isnan(block_covariance(x[:1], x[:1]))
+    n, reps, phi = 400, 2000, 0.5
+    z1 = rng.standard_normal((reps, n))
+    z2 = 0.7 * z1 + np.sqrt(1 - 0.49) * rng.standard_normal((reps, n))
+    a, b = np.empty_like(z1), np.empty_like(z2)
+    a[:, 0], b[:, 0] = z1[:, 0], z2[:, 0]
+    for i in range(1, n):
+        a[:, i] = phi * a[:, i - 1] + z1[:, i]
+        b[:, i] = phi * b[:, i - 1] + z2[:, i]
+    true = np.cov(a.mean(axis=1), b.mean(axis=1))[0, 1]
+    est = np.mean([block_covariance(a[k], b[k]) for k in range(reps)])
+    assert est == pytest.approx(true, rel=0.10)
 
 
 def test_P_error_takes_only_the_flow_beyond_its_noise():

@@ -23,7 +23,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..states import Pole, Profile, SlabState
-from .stats import CorrelatedSlope, block_average, robust_slope, slope_scatter
+from .stats import (
+    CorrelatedSlope,
+    block_average,
+    block_covariance,
+    robust_slope,
+    slope_scatter,
+)
 
 # A profile whose bin-to-bin scatter of f (3 MAD of its first differences / √2) is below this
 # is smooth: measured, CSPH copper (solid and porous) ≤ 0.004, LJ MD ≥ 0.022 (the cold FCC
@@ -139,13 +145,15 @@ def beyond_noise(d: float, noise: float) -> float:
 
 
 def excess_spread(a: np.ndarray, b: np.ndarray, n_blocks: int = 8) -> float:
-    """Half the mean difference of two paired series beyond its noise:
-    ½ √max(0, Δ² − σ_Δ²), Δ the mean of b − a and σ_Δ its block-average error
+    """Half the mean difference of two paired series beyond its noise, with its sign:
+    ½ sign(Δ) √max(0, Δ² − σ_Δ²), Δ the mean of b − a and σ_Δ its block-average error
     (``stats.block_average``). Zero for two halves that agree within their noise; half
-    their difference for a deterministic solver's non-uniform slab or a drifting one."""
+    their difference for a deterministic solver's non-uniform slab or a drifting one. The
+    sign lets two fields' spreads be correlated (the slab's u and P drift together)."""
     d = np.asarray(b, dtype=float) - np.asarray(a, dtype=float)
     m, e = block_average(d, n_blocks)
-    return 0.5 * beyond_noise(m, e if np.isfinite(e) else 0.0)
+    excess = beyond_noise(m, e if np.isfinite(e) else 0.0)
+    return float(np.sign(m)) * 0.5 * excess if excess > 0 else 0.0
 
 
 def bin_edges(profile: Profile, nbins: int) -> np.ndarray:
@@ -195,26 +203,40 @@ _JUMP_ARGS = ("rho1", "P1", "E1", "D", "u", "rho", "P", "E", "u1")
 
 
 def jump_residual_errors(
-    values: dict[str, float], errors: dict[str, float], rel_step: float = 1e-6
+    values: dict[str, float],
+    errors: dict[str, float],
+    rel_step: float = 1e-6,
+    cov: dict[tuple[str, str], float] | None = None,
 ) -> dict[str, float]:
     """Standard errors of ``jump_residuals`` by first-order propagation.
 
     ``values``/``errors`` are keyed by the arguments of ``jump_residuals`` (rho1, P1, E1, D,
-    u, rho, P, E, u1; missing errors count as 0). The errors are treated as independent,
-    σ_r² = Σ (∂r/∂x σ_x)², with the derivatives taken by central differences.
+    u, rho, P, E, u1; missing errors count as 0); ``cov`` holds the covariances of pairs
+    of them that are measured together (the slab's u and P: ``measure_point``), the rest
+    independent: σ_r² = Σ (∂r/∂x σ_x)² + 2 Σ_pairs ∂r/∂x ∂r/∂y cov(x, y), the derivatives
+    taken by central differences.
     """
     base = {k: float(values.get(k, 0.0)) for k in _JUMP_ARGS}
-    var = {k: 0.0 for k in ("mass", "momentum", "energy")}
+    keys = ("mass", "momentum", "energy")
+    cov = cov or {}
+    wanted = {n for pair in cov for n in pair}
+    var = {k: 0.0 for k in keys}
+    grad: dict[str, dict[str, float]] = {}
     for name in _JUMP_ARGS:
         sx = float(errors.get(name, 0.0) or 0.0)
-        if not sx > 0:
+        if not (sx > 0 or name in wanted):
             continue
         h = rel_step * max(abs(base[name]), 1.0)
         up = jump_residuals(**{**base, name: base[name] + h})
         dn = jump_residuals(**{**base, name: base[name] - h})
-        for k in var:
-            var[k] += ((up[k] - dn[k]) / (2 * h) * sx) ** 2
-    return {k: float(np.sqrt(v)) for k, v in var.items()}
+        grad[name] = {k: (up[k] - dn[k]) / (2 * h) for k in keys}
+        for k in keys:
+            var[k] += (grad[name][k] * (sx if sx > 0 else 0.0)) ** 2
+    for (a, b), c in cov.items():
+        if a != b and np.isfinite(c) and a in grad and b in grad:
+            for k in keys:
+                var[k] += 2.0 * grad[a][k] * grad[b][k] * c
+    return {k: float(np.sqrt(max(v, 0.0))) for k, v in var.items()}
 
 
 # Rules of the point measurement, the same for every backend and scheme.
@@ -238,12 +260,14 @@ CLOSURES = ("mass", "momentum", "energy", "flow")  # the residuals an ok point c
 COMPACTION_TOL = 0.005
 
 
-def residual_text(values: dict) -> str:
-    """The jump residuals and the slab's flow residual with their errors, one line."""
+def residual_text(values: dict, closures: tuple[str, ...] = CLOSURES) -> str:
+    """The jump residuals and the slab's flow residual with their errors, one line; one
+    that is not among ``closures`` is marked a diagnostic."""
 
     def one(k: str) -> str:
         err = values.get(f"residual_{k}_err", float("nan"))
-        return f"{k} {values['residual_' + k]:+.3%} ± {err:.2%}"
+        note = "" if k in closures else " (diagnostic)"
+        return f"{k} {values['residual_' + k]:+.3%} ± {err:.2%}{note}"
 
     return "residuals: " + ", ".join(one(k) for k in CLOSURES if f"residual_{k}" in values)
 
@@ -283,11 +307,12 @@ def named_causes(
     residual_tol: float,
     spread: dict[str, tuple[float, float]] | None = None,
     pole: Pole | None = None,
+    flow_closes: bool = True,
 ) -> list[str]:
     """Physical causes, measured on the point, that keep its slab from being the steady
     shocked state the jump conditions describe:
     - the slab still flows relative to the boundary behind it (``residual_flow`` does not
-      close): a weak front's relaxation tail or acoustic ringing between the boundary and
+      close, where it is a closure: ``flow_closes``): a weak front's relaxation tail or acoustic ringing between the boundary and
       the front, averaged over too short a run (the LJ liquid's default 80-cell piston, u_p
       = 1: the material 12-20 σ behind the front moves at 0.96-0.98 u_p, the whole shocked
       column at −0.02 to −0.035 σ/τ in the piston frame for 10 τ, and the wall's pressure
@@ -323,7 +348,7 @@ def named_causes(
                        "noise (a relaxation zone, a broad front's tail, a state still "
                        "changing): measure further behind the front or later")  # fmt: skip
     r, e = values.get("residual_flow", np.nan), values.get("residual_flow_err", np.nan)
-    if np.isfinite(r) and not _closes(r, e, residual_tol):
+    if flow_closes and np.isfinite(r) and not _closes(r, e, residual_tol):
         out.append(
             f"slab not at rest: it moves at "
             f"{values['u_p_measured'] - values['u_p']:+.3g} ± {values['u_p_measured_err']:.2g} "
@@ -414,6 +439,7 @@ def measure_point(
     front_speed: tuple[float, float] | None = None,
     n_blocks: int = N_BLOCKS,
     track: tuple[np.ndarray, np.ndarray] | None = None,
+    u_p_from: str = "boundary",
 ) -> dict[str, float | str | bool]:
     """One Hugoniot point from the samples of a run (module docstring).
 
@@ -444,7 +470,18 @@ def measure_point(
         (``P_flow_err``): the momentum of the flow beyond its noise, since the noise part is
         acoustic motion whose pressure swings P's block error already holds (replica study
         of the default liquid, 8 seeds: with ρ0 D σ_flow the pooled reduced χ² of P was 0.40,
-        its errors 1.6 times the seeds' scatter; with this rule 0.79 over every scheme);
+        its errors 1.6 times the seeds' scatter; with this rule 0.79 over every scheme).
+        With ``u_p_from = "slab"`` (the window methods) the jump is taken at the slab's own
+        velocity instead, ``u_p_jump`` = u_p_measured ± its error, P's error is its own and
+        the flow a diagnostic, not a closure: a window's outflow boundary holds the shocked
+        material only on average, the region between the slab and the outflow lags it, and
+        the front sees the slab (replica study, 39 window points: the median |momentum
+        residual| 0.89 % at the boundary's u_p, 0.28 % at the slab's; the slab's P on the
+        equilibrium Hugoniot within 0.1 % sd over seeds, 0.4-1 % at the boundary's u_p).
+        The slab's u and P errors are correlated (``u_p_P_corr``: the block covariance of
+        their means plus the products of their signed spreads, ``excess_spread``; median
+        0.8 on those points) and propagate into the residuals so (``jump_residual_errors``);
+        ``u_p_jump`` is the piston's velocity (error 0) otherwise;
       every field of the slabs: block averages over the samples (``N_BLOCKS`` blocks) with
         standard errors, widened in quadrature by what is not noise: half the difference of
         the slab's near and far halves (a slab that is not uniform: a relaxation zone, the
@@ -465,7 +502,8 @@ def measure_point(
     state ahead is at the pole the jump is taken from (``ahead_off_pole``: off by more than
     ``CLOSE_SIGMAS`` errors and ``residual_tol`` of the jump, it moves the residuals taken
     from the state ahead as measured past the tolerance; flag ``ahead_off_pole``);
-    ``not_converged`` when one does not; else ``too_few_samples``. ``diagnostic`` says why
+    ``not_converged`` when one does not (the flow only with ``u_p_from = "boundary"``);
+    else ``too_few_samples``. ``diagnostic`` says why
     a point is not ok, with the physical causes measured on it (``named_causes``).
     """
     t = np.asarray(h["t"], dtype=float)
@@ -498,6 +536,15 @@ def measure_point(
         if side == "behind":
             spread[k] = (2.0 * space, 2.0 * time_)
         return m, float(np.sqrt(e * e + space * space + time_ * time_))
+
+    def covariance(k1: str, k2: str) -> float:
+        """Covariance of the slab behind's means of fields k1, k2 (as ``mean_err`` widens
+        their errors): the block covariance, plus the products of their signed spreads
+        (half the near-far and late-early differences beyond noise, each one shift that
+        moves both fields together)."""
+        c = block_covariance(_field(behind, k1), _field(behind, k2), n_blocks)
+        c = c if np.isfinite(c) else 0.0
+        return float(c + 0.25 * sum(a * b for a, b in zip(spread[k1], spread[k2], strict=True)))
 
     out: dict[str, float | str | bool] = {}
     tt, tx = (
@@ -533,19 +580,34 @@ def measure_point(
     out["ahead_u"] = out["ahead_u"] - u_ahead  # in the frame of the pole material
     rho, P, E = out["rho"], out["P"], out["E"]
     P0, P0_err = pole.P0, pole.P0_err
+    if u_p_from not in ("boundary", "slab"):
+        raise ValueError(f"u_p_from must be 'boundary' or 'slab', not {u_p_from!r}")
+    at_slab = u_p_from == "slab"
     du = out["u_p_measured"] - u_p
     flow = float(np.hypot(du, u_s_err)) if np.isfinite(du) and np.isfinite(u_s_err) else 0.0
     out["u_p_flow_err"] = flow
-    # P's error gains only the flow beyond its noise: the slab's velocity noise is acoustic
-    # motion whose pressure swings (δP = Z δu) P's own block error already holds
+    # the slab's u and P move together (acoustic motion, a drift along the Hugoniot)
+    cov_uP = covariance("u", "P")
     P_stat = float(out["P_err"])  # without the flow: in the residuals it enters through u
-    P_flow = pole.rho0 * abs(D) * beyond_noise(du, u_s_err) if np.isfinite(D) else 0.0
+    norm = u_s_err * P_stat  # 0 for an exact model: no correlation to speak of
+    corr = cov_uP / norm if np.isfinite(norm) and norm > 0 else np.nan
+    out["u_p_P_corr"] = float(np.clip(corr, -1.0, 1.0)) if np.isfinite(corr) else np.nan
+    if at_slab:
+        # the jump the front sees: the slab's own velocity, its error correlated with P's
+        u_jump, u_jump_err, P_flow = float(out["u_p_measured"]), float(u_s_err), 0.0
+        cov = {("u", "P"): out["u_p_P_corr"] * norm} if np.isfinite(corr) else {}
+    else:
+        # P's error gains only the flow beyond its noise: the slab's velocity noise is
+        # acoustic motion whose pressure swings (δP = Z δu) P's own block error holds
+        u_jump, u_jump_err, cov = u_p, 0.0, {}
+        P_flow = pole.rho0 * abs(D) * beyond_noise(du, u_s_err) if np.isfinite(D) else 0.0
+    out["u_p_jump"], out["u_p_jump_err"] = u_jump, u_jump_err
     out["P_flow_err"] = float(P_flow)
     out["P_err"] = float(np.hypot(P_stat, P_flow))
     out["V"] = 1.0 / rho
     out["V_err"] = out["rho_err"] / rho**2
-    out["P_rh"] = P0 + pole.rho0 * D * u_p
-    out["P_rh_err"] = float(pole.rho0 * abs(u_p) * D_err + P0_err)
+    out["P_rh"] = P0 + pole.rho0 * D * u_jump
+    out["P_rh_err"] = float(pole.rho0 * np.hypot(abs(u_jump) * D_err, abs(D) * u_jump_err) + P0_err)
     out["E_minus_E0"] = E - pole.E0
     out["E_minus_E0_err"] = float(np.hypot(out["E_err"], pole.E0_err))
     out["shear_stress"] = 0.5 * (P - 0.5 * (out["Pyy"] + out["Pzz"]))
@@ -560,8 +622,9 @@ def measure_point(
         and lead > TWO_WAVE_FRACTION * abs(P - P0)
     )
     out["two_wave"] = float(two_wave)
-    vals = {"D": D, "u": u_p, "rho": rho, "P": P, "E": E}
-    errs = {"D": D_err, "u": flow, "rho": out["rho_err"], "P": P_stat, "E": out["E_err"]}
+    vals = {"D": D, "u": u_jump, "rho": rho, "P": P, "E": E}
+    errs = {"D": D_err, "u": u_jump_err if at_slab else flow, "rho": out["rho_err"], "P": P_stat,
+            "E": out["E_err"]}  # fmt: skip
     if two_wave:
         vals.update(rho1=out["ahead_rho"], P1=out["ahead_P"], E1=out["ahead_E"],
                     u1=out["ahead_u"])  # fmt: skip
@@ -572,20 +635,22 @@ def measure_point(
         errs.update(rho1=pole.rho0_err, P1=P0_err, E1=pole.E0_err)
     res = jump_residuals(**vals)
     out.update({f"residual_{k}": v for k, v in res.items()})
-    res_err = jump_residual_errors(vals, errs)
+    res_err = jump_residual_errors(vals, errs, cov=cov)
     out.update({f"residual_{k}_err": v for k, v in res_err.items()})
     n_ok = int(np.isfinite(_field(behind, "rho")).sum())
     out["n_samples"] = n_ok
-    finite = all(np.isfinite(v) for v in (D, u_p, rho, P, E))
+    finite = all(np.isfinite(v) for v in (D, u_jump, rho, P, E))
     enough = n_ok >= max(2 * n_blocks, n // 2)
-    # the fourth closure: the shocked slab at rest relative to the boundary behind it
+    # the fourth closure: the shocked slab at rest relative to the boundary behind it; a
+    # diagnostic only where the jump is taken at the slab's own velocity
     out["residual_flow"] = float(du / u_p) if u_p != 0 and np.isfinite(du) else np.nan
     out["residual_flow_err"] = float(u_s_err / abs(u_p)) if u_p != 0 else np.nan
-    res["flow"], res_err["flow"] = out["residual_flow"], out["residual_flow_err"]
+    if not at_slab:
+        res["flow"], res_err["flow"] = out["residual_flow"], out["residual_flow_err"]
     closes = all(_closes(v, res_err[k], residual_tol) for k, v in res.items())
     # ok is a jump from what is actually ahead too: a state ahead measurably off the pole
     # moves the residuals taken from it beyond the tolerance (``ahead_off_pole``)
-    off = ahead_off_pole(out, residual_tol, pole)  # out["u_p"] is the jump's u_p
+    off = ahead_off_pole({**out, "u_p": u_jump}, residual_tol, pole)
     out["ahead_off_pole"] = float(off is not None)
     converged = bool(finite and enough and closes and off is None)
     out["converged"] = converged
@@ -600,12 +665,13 @@ def measure_point(
     else:
         out["status"] = "ok" if converged else "not_converged"
         # the measured causes first: a status table shows the diagnostic's start
-        causes = named_causes({**out, "u_p": u_p}, residual_tol, spread, pole)
+        causes = named_causes({**out, "u_p": u_jump}, residual_tol, spread, pole,
+                              flow_closes=not at_slab)  # fmt: skip
         out["diagnostic"] = (
             ""
             if converged
             else "".join(f"{c}; " for c in causes)
-            + f"{residual_text(out)}; ok needs each within shock.residual_tol = "
+            + f"{residual_text(out, tuple(res))}; ok needs each within shock.residual_tol = "
             f"{residual_tol:.3g} and {CLOSE_SIGMAS:g} of its error"
         )
     return out

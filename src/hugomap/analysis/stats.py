@@ -28,6 +28,23 @@ def block_average(series: np.ndarray, n_blocks: int = 8) -> tuple[float, float]:
     return float(y.mean()), float(blocks.std(ddof=1) / np.sqrt(nb))
 
 
+def block_covariance(x: np.ndarray, y: np.ndarray, n_blocks: int = 8) -> float:
+    """Covariance of the means of two correlated series sampled together, by block
+    averaging: cov(x̄, ȳ) = Σ (x̄_b − ⟨x̄_b⟩)(ȳ_b − ⟨ȳ_b⟩) / ((n_blocks − 1) n_blocks) over
+    the blocks' means, the samples where both are finite cut as in ``block_average`` (so
+    that cov(x, x) is the square of its standard error). NaN with fewer than 2 blocks."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    nb = min(n_blocks, x.size)
+    if nb < 2:
+        return float("nan")
+    m = x.size // nb
+    bx = x[x.size - nb * m :].reshape(nb, m).mean(axis=1)
+    by = y[y.size - nb * m :].reshape(nb, m).mean(axis=1)
+    return float(np.sum((bx - bx.mean()) * (by - by.mean())) / ((nb - 1) * nb))
+
+
 def finite_pairs(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(t, y) as float arrays, keeping the samples where both are finite."""
     t = np.asarray(t, dtype=float)

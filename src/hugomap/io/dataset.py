@@ -41,24 +41,31 @@ POINT_VARS: dict[str, tuple[str, str]] = {
     "omega_drift": ("sigma tau^-1", "window points: front drift L d(omega)/dt while averaged"),
     "u_p_measured": ("sigma tau^-1", "measured particle-velocity jump across the front"),
     "u_p_set": ("sigma tau^-1", "particle-velocity jump set by the window, u_out - u_in"),
+    "u_p_jump": (
+        "sigma tau^-1",
+        "particle-velocity jump the jump conditions use: the piston's velocity (exact), a "
+        "window's measured slab (u_p_measured)",
+    ),
+    "u_p_P_corr": ("1", "correlation of the errors of u_p_measured and P (one slab)"),
     "rho": ("sigma^-3", "number density behind the front"),
     "V": ("sigma^3", "specific volume behind the front (per atom, m = 1)"),
     "P": (P_UNIT, "longitudinal stress behind the front, P_xx = -sigma_xx"),
     "Pyy": (P_UNIT, "transverse stress behind the front, P_yy"),
     "Pzz": (P_UNIT, "transverse stress behind the front, P_zz"),
-    "P_rh": (P_UNIT, "Rayleigh-line pressure P0 + rho0 D u_p"),
+    "P_rh": (P_UNIT, "Rayleigh-line pressure P0 + rho0 D u_p_jump"),
     "T": ("epsilon k_B^-1", "temperature behind the front"),
     "E": ("epsilon", "specific internal energy behind the front (per atom)"),
     "E_minus_E0": ("epsilon", "specific internal energy jump E - E0"),
     "shear_stress": (P_UNIT, "(P_xx - (P_yy + P_zz)/2) / 2 behind the front"),
     # Across the tracked front, from the pole (1 = 0) or, when two_wave = 1, from the state
     # just ahead of it (1 = ahead_*).
-    "residual_mass": ("1", "relative residual of rho1 (D - u1) = rho (D - u_p)"),
-    "residual_momentum": ("1", "relative residual of P - P1 = rho1 (D - u1)(u_p - u1)"),
+    "residual_mass": ("1", "relative residual of rho1 (D - u1) = rho (D - u_p_jump)"),
+    "residual_momentum": ("1", "relative residual of P - P1 = rho1 (D - u1)(u_p_jump - u1)"),
     "residual_energy": ("1", "relative residual of E - E1 = (P + P1)(V1 - V)/2"),
     "residual_flow": (
         "1",
-        "the shocked slab's flow relative to the boundary behind it, (u_p_measured - u_p)/u_p",
+        "the shocked slab's flow relative to the boundary behind it, (u_p_measured - u_p)/u_p "
+        "(a closure for the piston, a diagnostic for a window)",
     ),
     "ahead_rho": ("sigma^-3", "number density just ahead of the tracked front"),
     "ahead_P": (P_UNIT, "P_xx just ahead of the tracked front (P0 unless a precursor runs)"),
@@ -78,7 +85,8 @@ POINT_VARS: dict[str, tuple[str, str]] = {
     "P_flow_err": (
         P_UNIT,
         "part of P_err from that flow beyond its noise: "
-        "rho0 D sqrt(max(0, (u_p_measured - u_p)^2 - u_p_measured_err^2))",
+        "rho0 D sqrt(max(0, (u_p_measured - u_p)^2 - u_p_measured_err^2)); 0 for a window "
+        "point (its jump is taken at the slab's velocity)",
     ),
     "n_samples": ("1", "profile samples averaged"),
     "wall_s": ("s", "wall-clock time of the point (load + drive)"),
@@ -98,7 +106,7 @@ ERR_SUFFIX = "_err"
 # Every point file carries these with their standard errors (NaN for a failed point), so an
 # aggregate has the same layout whichever points failed (a scene whose every point failed
 # still has D_err).
-ALWAYS_WITH_ERR = ("D", "u_p_measured", "rho", "V", "P", "E", "E_minus_E0",
+ALWAYS_WITH_ERR = ("D", "u_p_measured", "u_p_jump", "rho", "V", "P", "E", "E_minus_E0",
                    "residual_mass", "residual_momentum", "residual_energy",
                    "residual_flow")  # fmt: skip
 
@@ -308,8 +316,8 @@ def cf_dataset(ds: xr.Dataset) -> xr.Dataset:
 # -- SI values of LJ quantities (a scene's ``units`` block) ---------------------------------
 K_B = 1.380649e-23  # Boltzmann constant [J K-1], exact since the 2019 SI
 #: Quantities that get an ``<name>_SI`` (and ``<name>_SI_err``) companion, also as ``ref_*``.
-SI_QUANTITIES = ("u_p", "piston_velocity", "u_p_set", "u_p_measured", "D", "rho", "V", "P",
-                 "P_rh", "T", "E", "E_minus_E0", "rho0", "P0", "E0", "T0")  # fmt: skip
+SI_QUANTITIES = ("u_p", "piston_velocity", "u_p_set", "u_p_measured", "u_p_jump", "D", "rho",
+                 "V", "P", "P_rh", "T", "E", "E_minus_E0", "rho0", "P0", "E0", "T0")  # fmt: skip
 SI_SUFFIX = "_SI"
 
 

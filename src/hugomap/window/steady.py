@@ -4,8 +4,9 @@ Once a scheme holds the front still (AMW, MW) or the dichotomy has found the fra
 runs for ``duration`` in that frame (the frame held) and every ``every`` steps records ω, the
 profile sums and the tracked front. The point is then measured by
 ``analysis.shock.measure_point`` with the window's edges as the boundaries, the upstream
-velocity u_in and the downstream u_out known exactly (u_p = u_out − u_in, kept as
-``u_p_set``), and the front speed taken from L dω/dt over the whole average: the window's
+velocity u_in known exactly, the jump taken at the velocity of the shocked slab itself
+(``u_p_jump``: the outflow u_out holds the material behind the slab only on average; u_out −
+u_in is kept as ``u_p_set``), and the front speed taken from L dω/dt over the whole average: the window's
 mass balance, which stays sharp for a broad weak front where the change-point tracker wanders
 (on the LJ liquid at u_p = 0.5 the tracker gave D 4 % low while ω was flat); the tracker's D
 is kept as ``D_front``.
@@ -69,7 +70,7 @@ def steady_state(
     r = measure_point(
         h, profile, pole, u_behind=win.u_out, u_ahead=win.u_in, gap=gap,
         avg_length=avg_length, residual_tol=residual_tol, left_gap=left_gap,
-        front_speed=(L * a, L * se),
+        front_speed=(L * a, L * se), u_p_from="slab",
     )  # fmt: skip
     r["omega_drift"], r["omega_drift_err"] = L * a, L * se
     # the slab's velocity (relative to the upstream) and P_xx per sample: their block
