@@ -41,6 +41,9 @@ def _aggregate(path: Path) -> Path:
             {"D": D, "V": V, "P": P, "u_p_measured": um}.items()}  # fmt: skip
     data |= {k + "_err": (dims, np.full((3, 3), 0.05)) for k in ("D", "V", "P", "u_p_measured")}
     data["u_p_set"] = (dims, np.asarray([[nan] * 3, [1.0, nan, nan], [nan] * 3]))
+    # the jump's u_p: the piston's speed, the window's slab (its u_p_measured)
+    data["u_p_jump"] = (dims, np.asarray([u, [0.98, nan, nan], [nan] * 3]))
+    data["u_p_jump_err"] = (dims, np.asarray([[0.0] * 3, [0.05, nan, nan], [nan] * 3]))
     data["status"] = (dims, np.asarray(status))
     data["converged"] = (dims, np.asarray(status) == "ok")
     ref = {"ref_V": [1.25, 1.14, 1.04, 0.96], "ref_P": [6.0, 11.4, 19.9, 34.2],
@@ -99,3 +102,18 @@ def test_reference_band_and_measured_u_p(drawn: dict) -> None:
                    for c in ax.collections)  # fmt: skip
     assert "u_p measured behind the front ± 1 s.e." in _legend(drawn["D_up"])
     assert "u_p measured behind the front ± 1 s.e." not in _legend(drawn["PV"])
+
+
+def test_d_up_draws_each_point_at_its_jump_u_p(drawn: dict) -> None:
+    """D–u_p: the piston at its speed (1, 2, 3) with its measured slab as a check bar, the
+    window point at its slab's u_p (0.98 ± 0.05), with no second bar for the same slab."""
+    ax = drawn["D_up"].axes[0]
+    at: dict[str, list] = {}
+    for c in ax.containers:
+        if c.lines[0] is not None and len(c.lines[0].get_xdata()):
+            x = tuple(np.round(np.asarray(c.lines[0].get_xdata(), float), 6))
+            at.setdefault(c.get_label(), []).append(x)
+    assert at["piston (MD)"] == [(1.0, 3.0)] and at["piston, not converged"] == [(2.0,)]
+    assert at["amw (MD)"] == [(0.98,)]
+    bars = sorted(x for k, v in at.items() if k.startswith("_") for x in v)
+    assert bars == [(0.97, 1.95, 2.9)]
