@@ -480,7 +480,7 @@ def measure_point(
         equilibrium Hugoniot within 0.1 % sd over seeds, 0.4-1 % at the boundary's u_p).
         The slab's u and P errors are correlated (``u_p_P_corr``: the block covariance of
         their means plus the products of their signed spreads, ``excess_spread``; median
-        0.8 on those points) and propagate into the residuals so (``jump_residual_errors``);
+        0.9 on the replica points) and propagate into the residuals so (``jump_residual_errors``);
         ``u_p_jump`` is the piston's velocity (error 0) otherwise;
       every field of the slabs: block averages over the samples (``N_BLOCKS`` blocks) with
         standard errors, widened in quadrature by what is not noise: half the difference of
