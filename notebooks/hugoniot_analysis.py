@@ -88,17 +88,25 @@ next(iter(tables.values())) if tables else None
 # ## Linear Us–up fits
 # Weighted least squares on the usable points of each scheme (`ok` and `not_converged`),
 # weights 1/D_err², covariance scaled by the reduced χ² where the points scatter more than
-# their errors (`hugomap.analysis.stats.linear_hugoniot_fit`). The piston's u_p is the
-# imposed one; a window scheme's is its own (`u_p` of the dataset is the requested value,
-# MW's actual amplitude is `u_p_set`).
+# their errors (`hugomap.analysis.stats.linear_hugoniot_fit`). Each point at the u_p its
+# jump was taken at, `u_p_jump`: the piston's imposed one, a window's shocked slab (`u_p` of
+# the dataset is the requested value; files without `u_p_jump`: MW's amplitude `u_p_set`).
+
 
 # %%
+def jump_u(p, scheme):
+    """The particle velocities a scheme's points were measured at (see above)."""
+    if "u_p_jump" in p and np.isfinite(p["u_p_jump"].values).any():
+        return np.where(np.isfinite(p["u_p_jump"].values), p["u_p_jump"].values, p["u_p"].values)
+    return p["u_p_set"].values if ("u_p_set" in p and scheme == "mw") else p["u_p"].values
+
+
 fits = []
 for name, ds in scenes.items():
     for scheme in ds["scheme"].values:
         p = ds.sel(scheme=scheme)
         use = np.isin(p["status"].values.astype(str), USABLE)
-        u = p["u_p_set"].values if ("u_p_set" in p and scheme == "mw") else p["u_p"].values
+        u = jump_u(p, scheme)
         f = linear_hugoniot_fit(u[use], p["D"].values[use], p["D_err"].values[use])
         fits.append({"scene": name, "scheme": str(scheme), **f})
     if "ref_u_p" in ds and "ref_D" in ds:
@@ -123,7 +131,7 @@ for name, ds in scenes.items():
         use = np.isin(p["status"].values.astype(str), USABLE)
         if not use.any():
             continue  # nothing drawn: no legend entry
-        u = p["u_p_set"].values if ("u_p_set" in p and scheme == "mw") else p["u_p"].values
+        u = jump_u(p, scheme)
         m, c = MARK.get(str(scheme), "x"), COLOR.get(str(scheme), "C4")
         ax1.errorbar(u[use], p["D"].values[use], yerr=p["D_err"].values[use], fmt=m,
                      color=c, label=str(scheme), capsize=2)  # fmt: skip
