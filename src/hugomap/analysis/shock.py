@@ -312,8 +312,8 @@ def named_causes(
     """Physical causes, measured on the point, that keep its slab from being the steady
     shocked state the jump conditions describe:
     - the slab still flows relative to the boundary behind it (``residual_flow`` does not
-      close, where it is a closure: ``flow_closes``): a weak front's relaxation tail or acoustic ringing between the boundary and
-      the front, averaged over too short a run (the LJ liquid's default 80-cell piston, u_p
+      close, where it is a closure: ``flow_closes``): a weak front's relaxation tail or
+      acoustic ringing between the boundary and the front, averaged over too short a run (the LJ liquid's default 80-cell piston, u_p
       = 1: the material 12-20 σ behind the front moves at 0.96-0.98 u_p, the whole shocked
       column at −0.02 to −0.035 σ/τ in the piston frame for 10 τ, and the wall's pressure
       is 1.4 % below the Rayleigh line);
@@ -480,8 +480,9 @@ def measure_point(
         equilibrium Hugoniot within 0.1 % sd over seeds, 0.4-1 % at the boundary's u_p).
         The slab's u and P errors are correlated (``u_p_P_corr``: the block covariance of
         their means plus the products of their signed spreads, ``excess_spread``; median
-        0.9 on the replica points) and propagate into the residuals so (``jump_residual_errors``);
-        ``u_p_jump`` is the piston's velocity (error 0) otherwise;
+        0.9 on the replica points) and propagate into the residuals so
+        (``jump_residual_errors``); ``u_p_jump`` is the piston's velocity (error 0)
+        otherwise;
       every field of the slabs: block averages over the samples (``N_BLOCKS`` blocks) with
         standard errors, widened in quadrature by what is not noise: half the difference of
         the slab's near and far halves (a slab that is not uniform: a relaxation zone, the
@@ -506,6 +507,8 @@ def measure_point(
     else ``too_few_samples``. ``diagnostic`` says why
     a point is not ok, with the physical causes measured on it (``named_causes``).
     """
+    if u_p_from not in ("boundary", "slab"):
+        raise ValueError(f"u_p_from must be 'boundary' or 'slab', not {u_p_from!r}")
     t = np.asarray(h["t"], dtype=float)
     xf = np.asarray(h["front"], dtype=float)
     n = t.size
@@ -580,8 +583,6 @@ def measure_point(
     out["ahead_u"] = out["ahead_u"] - u_ahead  # in the frame of the pole material
     rho, P, E = out["rho"], out["P"], out["E"]
     P0, P0_err = pole.P0, pole.P0_err
-    if u_p_from not in ("boundary", "slab"):
-        raise ValueError(f"u_p_from must be 'boundary' or 'slab', not {u_p_from!r}")
     at_slab = u_p_from == "slab"
     du = out["u_p_measured"] - u_p
     flow = float(np.hypot(du, u_s_err)) if np.isfinite(du) and np.isfinite(u_s_err) else 0.0
