@@ -44,6 +44,7 @@ import xarray as xr  # noqa: E402
 from hugomap.analysis.stats import linear_hugoniot_fit  # noqa: E402
 from hugomap.campaign import reference_at  # noqa: E402
 from hugomap.failures import FAILURES  # noqa: E402
+from hugomap.io.dataset import jump_velocity  # noqa: E402
 
 RESULTS = Path(os.environ.get("HUGOMAP_RESULTS", "results"))
 FIGURES = RESULTS / "figures" / "notebook"
@@ -94,19 +95,12 @@ next(iter(tables.values())) if tables else None
 
 
 # %%
-def jump_u(p, scheme):
-    """The particle velocities a scheme's points were measured at (see above)."""
-    if "u_p_jump" in p and np.isfinite(p["u_p_jump"].values).any():
-        return np.where(np.isfinite(p["u_p_jump"].values), p["u_p_jump"].values, p["u_p"].values)
-    return p["u_p_set"].values if ("u_p_set" in p and scheme == "mw") else p["u_p"].values
-
-
 fits = []
 for name, ds in scenes.items():
     for scheme in ds["scheme"].values:
         p = ds.sel(scheme=scheme)
         use = np.isin(p["status"].values.astype(str), USABLE)
-        u = jump_u(p, scheme)
+        u = jump_velocity(p)[0]
         f = linear_hugoniot_fit(u[use], p["D"].values[use], p["D_err"].values[use])
         fits.append({"scene": name, "scheme": str(scheme), **f})
     if "ref_u_p" in ds and "ref_D" in ds:
@@ -131,7 +125,7 @@ for name, ds in scenes.items():
         use = np.isin(p["status"].values.astype(str), USABLE)
         if not use.any():
             continue  # nothing drawn: no legend entry
-        u = jump_u(p, scheme)
+        u = jump_velocity(p)[0]
         m, c = MARK.get(str(scheme), "x"), COLOR.get(str(scheme), "C4")
         ax1.errorbar(u[use], p["D"].values[use], yerr=p["D_err"].values[use], fmt=m,
                      color=c, label=str(scheme), capsize=2)  # fmt: skip

@@ -35,6 +35,7 @@ from .campaign_expand import (  # noqa: F401 (re-exported: the campaign's public
     get_dotted,
     variants,
 )
+from .io.dataset import jump_velocity
 from .registry import backend, scene_schema, solver_of
 
 USABLE = ("ok", "not_converged")
@@ -277,19 +278,14 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
         knobs = _knobs(scene, c0)
         for scheme in ds["scheme"].values:
             p = ds.sel({"scheme": scheme})
+            jump = jump_velocity(p)  # the u_p each jump was taken at (a window's slab)
             for i, u in enumerate(p["u_p"].values.astype(float)):
                 status = str(p["status"].values[i])
 
                 def val(k: str, _p=p, _i=i) -> float:
                     return float(_p[k].values[_i]) if k in _p else math.nan
 
-                # the u_p the point's jump is taken at (a window's slab); files without it:
-                # the boundary's (MW: the amplitude it reached)
-                u_eval, u_err, corr = val("u_p_jump"), val("u_p_jump_err"), val("u_p_P_corr")
-                if not math.isfinite(u_eval):
-                    u_eval, u_err, corr = u, 0.0, 0.0
-                    if scheme == "mw" and math.isfinite(val("u_p_set")):
-                        u_eval = val("u_p_set")
+                u_eval, u_err, corr = (float(c[i]) for c in jump)
                 row: dict[str, Any] = {
                     "case": v.case, "study": v.study, "variant": v.label, "scene": v.scene,
                     "scheme": str(scheme), "axis": v.axis,

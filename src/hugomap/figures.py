@@ -12,6 +12,8 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter  # noqa: E402
 
+from .io.dataset import jump_velocity  # noqa: E402
+
 
 def _labels(ds: xr.Dataset, scene: str) -> dict:
     """The scene backend's figure text (``Backend.figure_labels``), from the resolved
@@ -80,18 +82,11 @@ def hugoniot_figures(
             x, y = d[xv].values, d[yv].values
             xe, ye = d[xv + "_err"].values, d[yv + "_err"].values
             if xv == "u_p_measured":
-                # at the jump's u_p: the piston's speed (exact), a window's slab (measured);
-                # files without it: the u_p coordinate, or u_out − u_in set by a window
-                nan = np.full(x.shape, np.nan)
-                u_set = d["u_p_set"].values if "u_p_set" in d else nan
-                u_jump = d["u_p_jump"].values if "u_p_jump" in d else nan
-                u_jump_err = d["u_p_jump_err"].values if "u_p_jump_err" in d else nan
+                # at the jump's u_p: the piston's speed (exact), a window's slab (measured)
                 um, ume = x * fx, xe * fx
-                x = np.where(np.isfinite(u_set), u_set, d["u_p"].values)
-                x = np.where(np.isfinite(u_jump), u_jump, x)
-                xe = np.where(np.isfinite(u_jump_err), u_jump_err, 0.0)
+                x, xe, _ = jump_velocity(d)
                 # the measured slab as a check only where the jump was not taken at it
-                um = np.where(np.isclose(u_jump * fx, um, rtol=1e-12, atol=0.0), np.nan, um)
+                um = np.where(np.isclose(x * fx, um, rtol=1e-12, atol=0.0), np.nan, um)
             x, xe, y, ye = x * fx, xe * fx, y * fy, ye * fy
             drawn = np.isfinite(x) & np.isfinite(y)
             ok = drawn & (status == "ok")

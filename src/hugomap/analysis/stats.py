@@ -20,12 +20,18 @@ def block_average(series: np.ndarray, n_blocks: int = 8) -> tuple[float, float]:
     y = y[np.isfinite(y)]
     if y.size == 0:
         return float("nan"), float("nan")
-    nb = min(n_blocks, y.size)
-    if nb < 2:
+    if min(n_blocks, y.size) < 2:
         return float(y.mean()), float("nan")
+    blocks = _block_means(y, n_blocks)
+    return float(y.mean()), float(blocks.std(ddof=1) / np.sqrt(blocks.size))
+
+
+def _block_means(y: np.ndarray, n_blocks: int) -> np.ndarray:
+    """Means of min(n_blocks, y.size) equal consecutive blocks of y (a remainder at the
+    start dropped, so the latest samples are kept)."""
+    nb = min(n_blocks, y.size)
     m = y.size // nb
-    blocks = y[y.size - nb * m :].reshape(nb, m).mean(axis=1)
-    return float(y.mean()), float(blocks.std(ddof=1) / np.sqrt(nb))
+    return y[y.size - nb * m :].reshape(nb, m).mean(axis=1)
 
 
 def block_covariance(x: np.ndarray, y: np.ndarray, n_blocks: int = 8) -> float:
@@ -36,12 +42,10 @@ def block_covariance(x: np.ndarray, y: np.ndarray, n_blocks: int = 8) -> float:
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     ok = np.isfinite(x) & np.isfinite(y)
     x, y = x[ok], y[ok]
-    nb = min(n_blocks, x.size)
-    if nb < 2:
+    if min(n_blocks, x.size) < 2:
         return float("nan")
-    m = x.size // nb
-    bx = x[x.size - nb * m :].reshape(nb, m).mean(axis=1)
-    by = y[y.size - nb * m :].reshape(nb, m).mean(axis=1)
+    bx, by = _block_means(x, n_blocks), _block_means(y, n_blocks)
+    nb = bx.size
     return float(np.sum((bx - bx.mean()) * (by - by.mean())) / ((nb - 1) * nb))
 
 

@@ -313,6 +313,26 @@ def cf_dataset(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
+def jump_velocity(points: xr.Dataset) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The particle velocity each point's jump was taken at, its error and its correlation
+    with P, for one scheme's points along ``u_p`` (an aggregate's ``.sel(scheme=...)``):
+    ``u_p_jump``, ``u_p_jump_err``, ``u_p_P_corr`` (the piston's speed, a window's slab);
+    in files without them the window's ``u_p_set`` (MW's amplitude; AMW and the dichotomy
+    hold the nominal one) or the ``u_p`` coordinate, error and correlation 0."""
+    nan = np.full(points.sizes["u_p"], np.nan)
+
+    def col(k: str) -> np.ndarray:
+        return points[k].values.astype(float) if k in points else nan
+
+    u_set = col("u_p_set")
+    u = np.where(np.isfinite(u_set), u_set, points["u_p"].values.astype(float))
+    jump = col("u_p_jump")
+    has = np.isfinite(jump)
+    err, corr = col("u_p_jump_err"), col("u_p_P_corr")
+    return (np.where(has, jump, u), np.where(has & np.isfinite(err), err, 0.0),
+            np.where(has & np.isfinite(corr), corr, 0.0))  # fmt: skip
+
+
 # -- SI values of LJ quantities (a scene's ``units`` block) ---------------------------------
 K_B = 1.380649e-23  # Boltzmann constant [J K-1], exact since the 2019 SI
 #: Quantities that get an ``<name>_SI`` (and ``<name>_SI_err``) companion, also as ``ref_*``.
