@@ -148,15 +148,33 @@ def test_copper_config_is_valid_and_filled() -> None:
         (  # the slab behind the front: shock.gap + window.outflow_gap + shock.avg_length
             "cu_porous",
             lambda s: s["window"].update(outflow_gap=2.0e-4),
-            "scenes.cu_porous.window.front_fraction = 0.48: the front starts 0.000576 m from the "
-            "outflow edge of window.length = 0.0012 m, less than the averaged slab behind it "
+            "scenes.cu_porous.window.front_fraction = 0.44: the front starts 0.000616 m from the "
+            "outflow edge of window.length = 0.0014 m, less than the averaged slab behind it "
             "needs, shock.gap + window.outflow_gap + shock.avg_length = 0.00065 m",
         ),
         (  # the window must fit between piston and front at the end of loading (snowplow D)
             "cu_porous",
-            lambda s: s["window"].update(length=1.4e-3),
-            "scenes.cu_porous.window.length = 0.0014: a window with window.front_fraction = "
-            "0.48 does not fit around the front at the end of loading",
+            lambda s: s["window"].update(length=2.0e-3),
+            "scenes.cu_porous.window.length = 0.002: a window with window.front_fraction = "
+            "0.44 does not fit around the front at the end of loading",
+        ),
+        (  # the shocked column at the end of loading, (1 - u_p/D) of what the front crossed
+            # (snowplow D = 385.7 m/s at 100 m/s), must hold 2 gap + avg_length = 0.75 mm
+            "cu_porous",
+            lambda s: s["shock"].update(load_fraction=0.4),
+            "scenes.cu_porous.shock.load_fraction = 0.4: the shocked column between piston and "
+            "front at the end of loading, shock.load_fraction x sample.length x (1 - u_p/D) = "
+            "0.0007111 m at u_p = 100 m/s (D = 385.7 m/s, the slowest front), must hold the "
+            "slab the window is normalised on, shock.avg_length + 2 shock.gap = 0.00075 m; "
+            "allowed range [0.4219, shock.end_fraction)",
+        ),
+        (  # the state ahead: 2 gap + avg_length = 1.2 mm of the 2.4-mm window ahead of the front
+            "cu_solid",
+            lambda s: s["window"].update(front_fraction=0.6),
+            "scenes.cu_solid.window.front_fraction = 0.6: the window's (1 - front_fraction) x "
+            "window.length = 0.00096 m ahead of the front must hold the slab ahead, 2 "
+            "shock.gap + shock.avg_length = 0.0012 m, to measure the state the jump starts "
+            "from; allowed range (0, 0.5]",
         ),
         (
             "cu_solid",

@@ -39,6 +39,21 @@ def resolve_defaults(scene: dict) -> None:
     scene["window"].setdefault("cut_every", 10.0 * dx)
 
 
+def slowest_front(scene: dict, u_p: float) -> float:
+    """The slowest shock speed D [m/s] the scene's material may have at piston speed
+    ``u_p`` [m/s], for sizing: the linear Hugoniot D = c0 + s u_p of its EOS; porous (dim
+    2), at most the snowplow speed u_p α/(α − 1) of full compaction to the solid density
+    (McQueen's limit; a compaction left incomplete runs faster, so room is not
+    overestimated)."""
+    eos = scene["material"]["eos"]
+    D = eos["c0"] + eos["s"] * u_p
+    por = scene["sample"].get("porous") if scene["dim"] == 2 else None
+    if por is not None and por["distention"] > 1.0:
+        a = por["distention"]
+        D = min(D, u_p * a / (a - 1.0))
+    return D
+
+
 def check(base: str, scene: dict, cfg: dict) -> list[str]:
     """Checks of a CSPH scene (SI units) that involve several keys, on a scene whose
     defaults are resolved (``resolve_defaults``); ``base``: its key path, ``scenes.<name>``;
@@ -47,7 +62,7 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
     out: list[str] = []
     sc = scene
     smp, sh, w = sc["sample"], sc["shock"], sc["window"]
-    eos, st = sc["material"]["eos"], sc["material"]["strength"]
+    st = sc["material"]["strength"]
     num = sc["numerics"]
     dx, length, dim = smp["dx"], smp["length"], sc["dim"]
     schemes = sc.get("schemes", cfg.get("schemes", ["piston"]))
@@ -128,12 +143,20 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             f"({sh['load_fraction']:g}, 1)"
         )
     behind = sh["load_fraction"] * length
+    # the piston has followed the front in: the shocked column at the end of loading is
+    # (1 - u_p/D) of what the front crossed, shortest at the largest u_p/D
+    u_worst = max(sh["u_p"], key=lambda u: u / slowest_front(sc, u))
+    column = behind * (1.0 - u_worst / slowest_front(sc, u_worst))
     need = sh["avg_length"] + 2.0 * sh["gap"]
-    if need >= behind:
+    if need > column * (1 + 1e-12):
         out.append(
-            f"{base}.shock.avg_length = {sh['avg_length']:.4g}: avg_length + 2 shock.gap "
-            f"(= {need:.4g} m) must be shorter than the length the front has crossed at the "
-            f"end of loading, shock.load_fraction x sample.length = {behind:.4g} m"
+            f"{base}.shock.load_fraction = {sh['load_fraction']:g}: the shocked column "
+            f"between piston and front at the end of loading, shock.load_fraction x "
+            f"sample.length x (1 - u_p/D) = {column:.4g} m at u_p = {u_worst:g} m/s (D = "
+            f"{slowest_front(sc, u_worst):.4g} m/s, the slowest front), must hold the slab "
+            f"the window is normalised on, shock.avg_length + 2 shock.gap = {need:.4g} m; "
+            f"allowed range [{min(need / (length * column / behind), 1.0):.4g}, "
+            f"shock.end_fraction) (or a longer sample.length, a shorter shock.gap)"
         )
     if sh["bin_width"] > 0.25 * sh["avg_length"]:
         out.append(
@@ -153,21 +176,25 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             )
     if windowed:
         Lw, ff = w["length"], w["front_fraction"]
-        u_max = max(sh["u_p"])
-        D = eos["c0"] + eos["s"] * u_max
-        if dim == 2 and por is not None and por["distention"] > 1.0:
-            # porous: the snowplow speed u α/(α − 1) (full compaction to the solid density; a
-            # compaction left incomplete runs faster, so the room is not overestimated)
-            a = por["distention"]
-            D = min(D, u_max * a / (a - 1.0))
-        room_behind = behind * (1.0 - u_max / D)
         room_ahead = (1.0 - sh["load_fraction"]) * length - WINDOW_INFLOW * dx
-        if ff * Lw > room_behind or (1.0 - ff) * Lw > room_ahead:
+        if ff * Lw > column * (1 + 1e-12) or (1.0 - ff) * Lw > room_ahead:
             out.append(
                 f"{base}.window.length = {Lw:.4g}: a window with window.front_fraction = {ff:g} "
-                f"does not fit around the front at the end of loading (room {room_behind:.4g} m "
-                f"behind it at u_p = {u_max:g} m/s, {room_ahead:.4g} m ahead); shorten it or "
+                f"does not fit around the front at the end of loading (room {column:.4g} m "
+                f"behind it at u_p = {u_worst:g} m/s, {room_ahead:.4g} m ahead); shorten it or "
                 "lengthen sample.length"
+            )
+        # the state ahead as measured: a slab of avg_length clear of the front and of the
+        # inflow by shock.gap (a precursor, material the inflow disturbed; without it the
+        # jump is taken from the pole unseen)
+        ahead_need = 2.0 * sh["gap"] + sh["avg_length"]
+        if (1.0 - ff) * Lw < ahead_need * (1 - 1e-12):
+            out.append(
+                f"{base}.window.front_fraction = {ff:g}: the window's (1 - front_fraction) x "
+                f"window.length = {(1.0 - ff) * Lw:.4g} m ahead of the front must hold the slab "
+                f"ahead, 2 shock.gap + shock.avg_length = {ahead_need:.4g} m, to measure the "
+                f"state the jump starts from; allowed range (0, {1.0 - ahead_need / Lw:.4g}] "
+                "(or a longer window.length)"
             )
         gap_out = w.get("outflow_gap", sh["gap"])
         slab = sh["gap"] + gap_out + sh["avg_length"]
