@@ -37,7 +37,7 @@ def _base() -> dict:
         "material": {"strength": {"model": "none"}},
         "sample": {"length": 4e-3, "dx": 1e-5},
         "shock": {"u_p": [500.0, 1000.0], "load_fraction": 0.5},
-        "window": {"length": 1.5e-3, "front_fraction": 0.6, "window_time": 1e-6,
+        "window": {"length": 2.0e-3, "front_fraction": 0.6, "window_time": 1e-6,
                    "average_time": 4e-6},
     }  # fmt: skip
 
