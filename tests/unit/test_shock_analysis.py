@@ -324,6 +324,24 @@ def test_a_slab_not_uniform_or_not_steady_beyond_tolerance_is_named():
     assert named_causes(v, 0.01, {"rho": (0.004, 0.004), "P": (0.02, 0.0)}, pole) == []
 
 
+def test_a_window_slab_lagging_its_boundary_is_named_not_closed():
+    """In a window (the flow a diagnostic, ``flow_closes`` False) a slab moving 1.96 ± 0.12 %
+    of u_p slower than the outflow boundary (AMW on porous copper at 300 m/s) is named as a
+    shocked region that is not uniform; 0.8 % (below residual_tol) or 1.96 ± 0.8 % (within 3
+    errors) is not. Where the flow is a closure (the piston) it is named as a slab not at
+    rest instead."""
+    from hugomap.analysis.shock import named_causes
+
+    v = {"residual_flow": -0.0196, "residual_flow_err": 0.0012, "u_p": 294.1,
+         "u_p_measured": 294.1, "u_p_measured_err": 0.4}  # fmt: skip
+    causes = named_causes(v, 0.01, flow_closes=False)
+    assert len(causes) == 1 and causes[0].startswith("shocked region not uniform")
+    assert "-1.96% ± 0.12%" in causes[0]
+    assert named_causes({**v, "residual_flow": -0.008}, 0.01, flow_closes=False) == []
+    assert named_causes({**v, "residual_flow_err": 0.008}, 0.01, flow_closes=False) == []
+    assert named_causes(v, 0.01)[0].startswith("slab not at rest")
+
+
 def test_a_disturbed_state_ahead_is_named_unless_two_wave():
     """Material ahead moving at 0.064 ± 0.008 with P 0.40 ± 0.02 above P0 (AMW at u_p = 3 on
     the default liquid): 1.4 % of a 29.75 jump in P, 2.1 % of u_p, beyond 3 errors: named.
