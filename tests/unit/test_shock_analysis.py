@@ -86,6 +86,11 @@ class _ToyProfile:
         return SlabState(rho=m[2], u=m[1], P=m[3], Pyy=m[3], Pzz=m[3], E=m[4])
 
 
+#: A state ahead as ``measure_point`` reports it, at the pole (ρ0 1, P0 1) at rest, with no
+#: error given (so never off the pole): what ``named_causes`` needs to see a state ahead.
+AHEAD = {"ahead_rho": 1.0, "ahead_u": 0.0, "ahead_P": 1.0}
+
+
 def _toy_run(P_bias: float, noise: float, wander: float = 0.0, seed: int = 3, flow: float = 0.0,
              ahead: tuple[float, float, float, float] = (0.0, 1.0, 1.0, 0.0),
              exact_at_slab: bool = False, sway: float = 0.0):  # fmt: skip
@@ -137,6 +142,24 @@ def test_a_point_is_ok_only_if_its_residuals_close_within_tolerance_and_errors()
         assert r["status"] == status, (bias, noise, r["diagnostic"])
         if status != "ok":
             assert "3 of its error" in r["diagnostic"]
+
+
+def test_a_point_is_not_ok_without_a_measured_state_ahead():
+    """The exact jump of the toy run is ok; the same run with the far boundary 8 bins ahead
+    of the front (2 gap = 6 leave 2 bins, below MIN_SLAB_BINS) has no state ahead, so what
+    the jump starts from was not seen: not ok, and the diagnostic says so."""
+    from hugomap.analysis.shock import measure_point
+
+    h, pole = _toy_run(0.0, 0.002)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                      residual_tol=0.01)  # fmt: skip
+    assert r["status"] == "ok", r["diagnostic"]
+    h["x_right"] = h["front"] + 8.0
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                      residual_tol=0.01)  # fmt: skip
+    assert np.isnan(r["ahead_P"])
+    assert r["status"] == "not_converged"
+    assert r["diagnostic"].startswith("no state ahead measured"), r["diagnostic"]
 
 
 def test_front_speed_error_covers_a_slow_wander():
@@ -298,7 +321,7 @@ def test_partial_compaction_is_named_beyond_its_tolerance_and_errors():
     COMPACTION_TOL) and 1.02 ± 0.01 (within 3 errors) are not; a solid slab has none."""
     from hugomap.analysis.shock import named_causes
 
-    base = {"residual_flow": 0.0, "residual_flow_err": 0.001}
+    base = {"residual_flow": 0.0, "residual_flow_err": 0.001, **AHEAD}
     assert any("partial compaction" in c
                for c in named_causes({**base, "alpha": 1.05, "alpha_err": 0.002}, 0.01))  # fmt: skip
     assert named_causes({**base, "alpha": 1.003, "alpha_err": 0.0}, 0.01) == []
@@ -314,7 +337,7 @@ def test_a_slab_not_uniform_or_not_steady_beyond_tolerance_is_named():
 
     pole = Pole(rho0=1.0, P0=1.0, E0=0.0, T0=1.0, Pyy0=1.0, rho0_err=0.0, P0_err=0.0,
                 E0_err=0.0, T0_err=0.0, Pyy0_err=0.0)  # fmt: skip
-    v = {"rho": 1.5, "P": 4.0, "E": 0.5, "residual_flow": 0.0, "residual_flow_err": 0.01}
+    v = {"rho": 1.5, "P": 4.0, "E": 0.5, "residual_flow": 0.0, "residual_flow_err": 0.01, **AHEAD}
     # jumps: rho 0.5, P 3, E 0.5; E's halves differ by 0.02 = 4 % of its jump
     causes = named_causes(v, 0.01, {"rho": (0.001, 0.0), "P": (0.0, 0.0), "E": (0.02, 0.0)}, pole)
     assert len(causes) == 1 and causes[0].startswith("slab not uniform")
@@ -333,7 +356,7 @@ def test_a_window_slab_lagging_its_boundary_is_named_not_closed():
     from hugomap.analysis.shock import named_causes
 
     v = {"residual_flow": -0.0196, "residual_flow_err": 0.0012, "u_p": 294.1,
-         "u_p_measured": 294.1, "u_p_measured_err": 0.4}  # fmt: skip
+         "u_p_measured": 294.1, "u_p_measured_err": 0.4, **AHEAD}  # fmt: skip
     causes = named_causes(v, 0.01, flow_closes=False)
     assert len(causes) == 1 and causes[0].startswith("shocked region not uniform")
     assert "-1.96% ± 0.12%" in causes[0]

@@ -302,6 +302,13 @@ def ahead_off_pole(
     return worst if worst[0] > residual_tol else None
 
 
+def ahead_seen(values: dict) -> bool:
+    """Whether the state ahead of the front was measured: ρ, u and P of the slab ahead
+    finite (some sample had a slab of ``MIN_SLAB_BINS`` bins clear of the front and of the
+    far boundary by ``shock.gap``)."""
+    return all(np.isfinite(values.get(f"ahead_{k}", np.nan)) for k in ("rho", "u", "P"))
+
+
 def named_causes(
     values: dict,
     residual_tol: float,
@@ -329,6 +336,7 @@ def named_causes(
       half of the samples − early half) of field k beyond their noise (``measure_point``)
       larger than ``residual_tol`` of the jump k − k0 in ρ, P or E (a relaxation zone, the
       tail of a broad front; the state still changing);
+    - no state ahead measured (``ahead_seen``): a point is not ``ok`` without it;
     - the state ahead off the pole while the jump is taken from the pole (no ``two_wave``):
       its P, u or ρ differs from the pole's by more than ``CLOSE_SIGMAS`` errors and
       ``residual_tol`` of the jump (AMW on the default liquid at u_p = 3: the material
@@ -374,6 +382,13 @@ def named_causes(
             f"partial compaction: the slab's distention alpha = {a:.4g} ± {ae:.2g} (1: fully "
             "compacted), so a full-compaction Hugoniot does not describe it and its volume, "
             "hence the energy jump, carries the pores' unevenness"
+        )
+    if not ahead_seen(values):
+        out.append(
+            f"no state ahead measured: no sample had a slab of {MIN_SLAB_BINS} bins between "
+            "shock.gap ahead of the front and shock.gap before the far boundary, so the jump "
+            "starts from the pole unseen (a precursor or a disturbed inflow would go "
+            "unnoticed): leave more room ahead of the front"
         )
     off = ahead_off_pole(values, residual_tol, pole)
     if off is not None:
@@ -511,8 +526,9 @@ def measure_point(
     state is at rest relative to the boundary that holds it). Status: ``ok`` when D, u_p, ρ, P, E are finite,
     at least max(2 n_blocks, half the samples) have a slab behind the front and all four
     close: |r| ≤ ``residual_tol`` and |r| ≤ ``CLOSE_SIGMAS`` of its error (a residual of
-    0.8 % with an error of 0.1 % is a bias, not noise) or ≤ ``RESIDUAL_FLOOR``, and the
-    state ahead is at the pole the jump is taken from (``ahead_off_pole``: off by more than
+    0.8 % with an error of 0.1 % is a bias, not noise) or ≤ ``RESIDUAL_FLOOR``, the state
+    ahead was measured (``ahead_seen``), and it is at the pole the jump is taken from
+    (``ahead_off_pole``: off by more than
     ``CLOSE_SIGMAS`` errors and ``residual_tol`` of the jump, it moves the residuals taken
     from the state ahead as measured past the tolerance; flag ``ahead_off_pole``);
     ``not_converged`` when one does not (the flow only with ``u_p_from = "boundary"``);
@@ -665,7 +681,10 @@ def measure_point(
     # moves the residuals taken from it beyond the tolerance (``ahead_off_pole``)
     off = ahead_off_pole({**out, "u_p": u_jump}, residual_tol, pole)
     out["ahead_off_pole"] = float(off is not None)
-    converged = bool(finite and enough and closes and off is None)
+    # ...and from a state ahead that was seen at all: without it a precursor or a disturbed
+    # inflow goes unnoticed (porous copper in a window with no room ahead: momentum +22 %)
+    seen = ahead_seen(out)
+    converged = bool(finite and enough and closes and off is None and seen)
     out["converged"] = converged
     if not (finite and enough):
         out["status"] = "too_few_samples"
