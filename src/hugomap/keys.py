@@ -68,6 +68,29 @@ def duplicate_point_tags(base: str, u_ps: list[float]) -> list[str]:
     return problems
 
 
+#: A slab narrower than this many profile bins is not measured in a sample
+#: (``analysis.shock``); the scene checks size the window's room ahead of the front by it.
+MIN_SLAB_BINS = 3
+
+
+def window_ahead_room(base: str, window: dict, shock: dict, unit: str) -> list[str]:
+    """A problem if a window (``window.length`` L, ``window.front_fraction`` f) leaves less
+    than 2 ``shock.gap`` + ``MIN_SLAB_BINS`` ``shock.bin_width`` ahead of the front: no slab
+    ahead could be measured, so a point could never see the state its jump starts from
+    (``analysis.shock.ahead_seen``). ``unit``: the lengths' unit, for the message."""
+    L, f = window["length"], window["front_fraction"]
+    need = 2.0 * shock["gap"] + MIN_SLAB_BINS * shock["bin_width"]
+    if (1.0 - f) * L >= need * (1 - 1e-12):
+        return []
+    return [
+        f"{base}.window.front_fraction = {f:g}: the window's (1 - front_fraction) x "
+        f"window.length = {(1.0 - f) * L:.4g} {unit} ahead of the front must hold a slab, "
+        f"2 shock.gap + {MIN_SLAB_BINS} shock.bin_width = {need:.4g} {unit}, to measure the "
+        f"state the jump starts from; allowed range (0, {max(1.0 - need / L, 0.0):.4g}] (or "
+        "a longer window.length)"
+    ]
+
+
 def config_hash(obj: Any) -> str:
     """SHA-256 (first 16 hex digits) of the canonical JSON of ``obj``."""
     return hashlib.sha256(json.dumps(obj, sort_keys=True).encode()).hexdigest()[:16]

@@ -85,6 +85,12 @@ def test_unsupported_window_settings_are_refused_naming_the_key() -> None:
     sc["model"]["pair_style"] = "lj/cut 3.0"
     msg = _problems(sc)
     assert "scenes.t.window.ghost_width = 2.5" in msg and "cutoff 3" in msg
+    # no room ahead of the front for the slab that sees the state the jump starts from
+    sc["window"] = {"front_fraction": 0.75}
+    sc["model"]["pair_style"] = "lj/cut 2.5"
+    msg = _problems(sc)
+    assert "scenes.t.window.front_fraction = 0.75: the window's (1 - front_fraction) x " in msg
+    assert "sigma ahead of the front must hold a slab" in msg
     # the MD backend's absorbing-outflow times are not LAMMPS keys
     sc["window"] = {"outflow": {"tau_fast": 0.5}}
     assert "tau_fast" in _problems(sc)

@@ -326,6 +326,25 @@ def test_ghost_width_at_least_rc_with_window_schemes() -> None:
     validate_config(cfg)
 
 
+def test_window_leaves_room_for_the_slab_ahead() -> None:
+    """The tiny window (24 sigma, front at 0.5) leaves 12 sigma ahead of the front, room for
+    2 shock.gap + 3 bins = 11; with the front at 0.6 it leaves 9.6: no slab ahead could be
+    measured, so the scene is refused (a piston-only scene is not)."""
+    cfg = tiny()
+    validate_config(copy.deepcopy(cfg))
+    cfg["scenes"]["tiny"]["window"]["front_fraction"] = 0.6
+    with pytest.raises(ConfigError) as ei:
+        validate_config(copy.deepcopy(cfg))
+    assert (
+        "scenes.tiny.window.front_fraction = 0.6: the window's (1 - front_fraction) x "
+        "window.length = 9.6 sigma ahead of the front must hold a slab, 2 shock.gap + 3 "
+        "shock.bin_width = 11 sigma, to measure the state the jump starts from; allowed "
+        "range (0, 0.5417]"
+    ) in str(ei.value)
+    cfg["schemes"] = ["piston"]
+    validate_config(cfg)
+
+
 def test_mw_position_gain_is_per_window_time_for_both_solvers() -> None:
     """One meaning: dimensionless, per window_time. The MD default 0.1 at the default
     window_time (2 tau) is the former 0.05 per tau."""

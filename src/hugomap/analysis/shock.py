@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..keys import MIN_SLAB_BINS
 from ..states import Pole, Profile, SlabState
 from .stats import (
     CorrelatedSlope,
@@ -241,7 +242,6 @@ def jump_residual_errors(
 
 # Rules of the point measurement, the same for every backend and scheme.
 N_BLOCKS = 8  # block averages over the samples (stats.block_average)
-MIN_SLAB_BINS = 3  # a slab narrower than this many bins is not measured in that sample
 TWO_WAVE_SIGMAS = 5.0  # a precursor's P_xx jump must exceed this many standard errors…
 TWO_WAVE_FRACTION = 0.03  # …and this fraction of the main jump P − P0
 CLOSE_SIGMAS = 3.0  # an ok point's jump residuals are within this many of their errors

@@ -18,7 +18,7 @@ import importlib.util
 import math
 from pathlib import Path
 
-from ..keys import duplicate_point_tags
+from ..keys import duplicate_point_tags, window_ahead_room
 
 #: Pair styles this backend runs, with the unit system each needs, and the position of the
 #: potential file among ``pair_coeff``'s arguments (None: no file).
@@ -284,11 +284,14 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
 
 
 def _check_window(base: str, scene: dict) -> list[str]:
-    """The window block of a scene that runs a window scheme: a rigid outflow (the absorbing
+    """The window block of a scene that runs a window scheme: room for the slab ahead of the
+    front (``keys.window_ahead_room``), a rigid outflow (the absorbing
     one reads the outflow wall's impulse, which this backend does not measure) and a frozen
     layer at least the model's cutoff thick (``md.window.MDWindow.from_piston`` refuses a
     thinner one)."""
     w, problems = scene["window"], []
+    unit = "sigma" if scene["model"].get("units", "lj") == "lj" else "Angstrom"
+    problems += window_ahead_room(base, w, scene["shock"], unit)
     if w["outflow"]["kind"] != "rigid":
         problems.append(
             f"{base}.window.outflow.kind = {w['outflow']['kind']!r}: solver lammps runs the "

@@ -12,7 +12,7 @@ point files and the aggregate (``io.dataset.with_si``; docs/datasets.md).
 
 from __future__ import annotations
 
-from ..keys import duplicate_point_tags
+from ..keys import duplicate_point_tags, window_ahead_room
 
 #: Relative tolerance of a data file's L_x against cells·a [-]: a prepared liquid sample is
 #: shorter by the walls' excess layer 2Γ/ρ0 (0.2 % of the default liquid, 0.6 % of a
@@ -73,6 +73,8 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             f"{out['tau_slow']:.4g}) tau"
         )
     schemes = scene.get("schemes", cfg.get("schemes", ["piston"]))
+    if any(s in WINDOW_SCHEMES for s in schemes):
+        problems += window_ahead_room(base, w, sh, "sigma")
     if any(s in WINDOW_SCHEMES for s in schemes) and w["ghost_width"] < pot["rc"]:
         # the window stage (md.window.MDWindow) refuses a frozen layer thinner than rc
         problems.append(
