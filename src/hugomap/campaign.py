@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .analysis.causes import CLOSURES
 from .analysis.replicas import replica_cases
-from .analysis.shock import CLOSURES
 from .campaign_expand import (  # noqa: F401 (re-exported: the campaign's public names)
     DEFAULT_NAME,
     SEP,

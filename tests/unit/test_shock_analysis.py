@@ -319,7 +319,7 @@ def test_P_error_takes_only_the_flow_beyond_its_noise():
 def test_partial_compaction_is_named_beyond_its_tolerance_and_errors():
     """A porous slab's distention: 1.05 ± 0.002 is partial compaction (named); 1.003 (below
     COMPACTION_TOL) and 1.02 ± 0.01 (within 3 errors) are not; a solid slab has none."""
-    from hugomap.analysis.shock import named_causes
+    from hugomap.analysis.causes import named_causes
 
     base = {"residual_flow": 0.0, "residual_flow_err": 0.001, **AHEAD}
     assert any("partial compaction" in c
@@ -332,7 +332,7 @@ def test_partial_compaction_is_named_beyond_its_tolerance_and_errors():
 def test_a_slab_not_uniform_or_not_steady_beyond_tolerance_is_named():
     """Near/far-half and late/early differences beyond noise (``spread``) above
     residual_tol of the jump are named, the worst field with it; below it nothing is."""
-    from hugomap.analysis.shock import named_causes
+    from hugomap.analysis.causes import named_causes
     from hugomap.states import Pole
 
     pole = Pole(rho0=1.0, P0=1.0, E0=0.0, T0=1.0, Pyy0=1.0, rho0_err=0.0, P0_err=0.0,
@@ -353,7 +353,7 @@ def test_a_window_slab_lagging_its_boundary_is_named_not_closed():
     shocked region that is not uniform; 0.8 % (below residual_tol) or 1.96 ± 0.8 % (within 3
     errors) is not. Where the flow is a closure (the piston) it is named as a slab not at
     rest instead."""
-    from hugomap.analysis.shock import named_causes
+    from hugomap.analysis.causes import named_causes
 
     v = {"residual_flow": -0.0196, "residual_flow_err": 0.0012, "u_p": 294.1,
          "u_p_measured": 294.1, "u_p_measured_err": 0.4, **AHEAD}  # fmt: skip
@@ -369,7 +369,7 @@ def test_a_disturbed_state_ahead_is_named_unless_two_wave():
     """Material ahead moving at 0.064 ± 0.008 with P 0.40 ± 0.02 above P0 (AMW at u_p = 3 on
     the default liquid): 1.4 % of a 29.75 jump in P, 2.1 % of u_p, beyond 3 errors: named.
     Within its errors, below residual_tol of the jump, or flagged two_wave: not."""
-    from hugomap.analysis.shock import named_causes
+    from hugomap.analysis.causes import named_causes
     from hugomap.states import Pole
 
     pole = Pole(rho0=0.8, P0=6.0, E0=-0.9, T0=2.0, Pyy0=6.0, rho0_err=0.0, P0_err=0.0,
@@ -393,7 +393,8 @@ def test_two_waves_need_a_precursor_compressed_in_the_sense_of_the_main_jump():
     it: the MD window's material ahead once came out 0.5 % rarefied, P 4 % of the jump
     low), it is not: the jump is taken from the pole (residuals ~0 here) and the state ahead
     is named as off the pole."""
-    from hugomap.analysis.shock import measure_point, named_causes
+    from hugomap.analysis.causes import named_causes
+    from hugomap.analysis.shock import measure_point
 
     for sign, two_wave in ((+1, 1.0), (-1, 0.0)):
         d = sign * 0.3

@@ -60,13 +60,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.shock import (
-    CLOSE_SIGMAS,
-    _closes,
-    jump_residual_errors,
-    jump_residuals,
-    residual_text,
-)
+from ..analysis.causes import CLOSE_SIGMAS, closes, residual_text
+from ..analysis.shock import jump_residual_errors, jump_residuals
 from ..analysis.stats import block_average
 from ..failures import SolverUnstable
 from ..states import Pole
@@ -539,7 +534,7 @@ def shock_frame_point(
     values["n_samples"] = st["n_samples"]
     values["atom_steps"] = float(n * steps)
     miss = (st["u_p"] - u_p) / u_p
-    closes = {k: _closes(v, res_err[k], tol) for k, v in res.items()}
+    closes = {k: closes(v, res_err[k], tol) for k, v in res.items()}
     # the rule that ended the iterations: a point the loop accepted is not refused for it
     closes["u_p"] = up_reached(st["u_p"] - u_p, st["u_p_err"], u_p, tol, prm.up_tolerance)
     finite = all(math.isfinite(st[k]) for k in ("D", "u_p", "rho", "P", "E"))
