@@ -40,7 +40,7 @@ averages are block averages of the samples (``analysis.stats.block_average``, 8 
 errors of u_p and D are those of their per-sample values, with the pole's errors added by
 first-order propagation (``rayleigh_errors``). The jump residuals are ``analysis.shock.jump_residuals`` of
 the measured state against the pole, with ``jump_residual_errors``; the point is ``ok`` when
-each closes (``analysis.shock``'s rule: within ``shock.residual_tol`` and 3 of its error) and
+each closes (``analysis.causes.closes``: within ``shock.residual_tol`` and 3 of its error) and
 the measured u_p is within the same of the scene's u_p; else ``not_converged``, the
 diagnostic naming what did not close.
 
@@ -534,26 +534,26 @@ def shock_frame_point(
     values["n_samples"] = st["n_samples"]
     values["atom_steps"] = float(n * steps)
     miss = (st["u_p"] - u_p) / u_p
-    closes = {k: closes(v, res_err[k], tol) for k, v in res.items()}
+    closing = {k: closes(v, res_err[k], tol) for k, v in res.items()}
     # the rule that ended the iterations: a point the loop accepted is not refused for it
-    closes["u_p"] = up_reached(st["u_p"] - u_p, st["u_p_err"], u_p, tol, prm.up_tolerance)
+    closing["u_p"] = up_reached(st["u_p"] - u_p, st["u_p_err"], u_p, tol, prm.up_tolerance)
     finite = all(math.isfinite(st[k]) for k in ("D", "u_p", "rho", "P", "E"))
-    ok = finite and all(closes.values())
+    ok = finite and all(closing.values())
     values["converged"] = ok
     status, diagnostic = ("ok", "") if ok else ("not_converged", "")
     if not ok:
         causes = []
-        if not closes["u_p"]:
+        if not closing["u_p"]:
             causes.append(f"u_p not reached: measured {st['u_p']:.6g} ± {st['u_p_err']:.2g} "
                           f"against {u_p:.6g} ({miss:+.3%}) after {len(its)} of "
                           "shock_frame.max_iterations iterations")  # fmt: skip
-        if not closes.get("momentum", True):
+        if not closing.get("momentum", True):
             causes.append("the state is off the Rayleigh line (momentum residual)")
-        if not closes.get("energy", True):
+        if not closing.get("energy", True):
             causes.append("the state is off the Hugoniot (energy residual)")
-        if not closes.get("mass", True):
+        if not closing.get("mass", True):
             causes.append("mass residual")
-        if scheme == "msst" and not (closes.get("momentum", True) and closes.get("energy", True)):
+        if scheme == "msst" and not (closing.get("momentum", True) and closing.get("energy", True)):
             causes.append("MSST has not settled on the Rayleigh line and the Hugoniot of its "
                           "shock speed: tune shock_frame.msst.q and mu, or a longer msst.relax_time")  # fmt: skip
         diagnostic = ("; ".join(causes) + f"; {residual_text(values)}; ok needs each within "
