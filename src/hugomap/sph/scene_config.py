@@ -8,7 +8,7 @@ workflow, so this module stays light: no numba, no xarray.
 
 from __future__ import annotations
 
-from ..keys import show
+from ..keys import show, window_ahead_room
 
 #: Smallest pore radius in lattice spacings (``hugomap.sph.sample.K_RESOLUTION``).
 K_RESOLUTION = 3.0
@@ -145,15 +145,16 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
     behind = sh["load_fraction"] * length
     # the piston has followed the front in: the shocked column at the end of loading is
     # (1 - u_p/D) of what the front crossed, shortest at the largest u_p/D
-    u_worst = max(sh["u_p"], key=lambda u: u / slowest_front(sc, u))
-    column = behind * (1.0 - u_worst / slowest_front(sc, u_worst))
+    D_worst, u_worst = max(((slowest_front(sc, u), u) for u in sh["u_p"]),
+                           key=lambda d: d[1] / d[0])  # fmt: skip
+    column = behind * (1.0 - u_worst / D_worst)
     need = sh["avg_length"] + 2.0 * sh["gap"]
     if need > column * (1 + 1e-12):
         out.append(
             f"{base}.shock.load_fraction = {sh['load_fraction']:g}: the shocked column "
             f"between piston and front at the end of loading, shock.load_fraction x "
             f"sample.length x (1 - u_p/D) = {column:.4g} m at u_p = {u_worst:g} m/s (D = "
-            f"{slowest_front(sc, u_worst):.4g} m/s, the slowest front), must hold the slab "
+            f"{D_worst:.4g} m/s, the slowest front), must hold the slab "
             f"the window is normalised on, shock.avg_length + 2 shock.gap = {need:.4g} m; "
             f"allowed range [{min(need / (length * column / behind), 1.0):.4g}, "
             f"shock.end_fraction) (or a longer sample.length, a shorter shock.gap)"
@@ -184,18 +185,11 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
                 f"behind it at u_p = {u_worst:g} m/s, {room_ahead:.4g} m ahead); shorten it or "
                 "lengthen sample.length"
             )
-        # the state ahead as measured: a slab of avg_length clear of the front and of the
-        # inflow by shock.gap (a precursor, material the inflow disturbed; without it the
-        # jump is taken from the pole unseen)
-        ahead_need = 2.0 * sh["gap"] + sh["avg_length"]
-        if (1.0 - ff) * Lw < ahead_need * (1 - 1e-12):
-            out.append(
-                f"{base}.window.front_fraction = {ff:g}: the window's (1 - front_fraction) x "
-                f"window.length = {(1.0 - ff) * Lw:.4g} m ahead of the front must hold the slab "
-                f"ahead, 2 shock.gap + shock.avg_length = {ahead_need:.4g} m, to measure the "
-                f"state the jump starts from; allowed range (0, {1.0 - ahead_need / Lw:.4g}] "
-                "(or a longer window.length)"
-            )
+        # the state ahead as measured, here over a whole avg_length (a precursor, material
+        # the inflow disturbed; without it the jump is taken from the pole unseen)
+        out += window_ahead_room(
+            base, w, sh, "m", ("the slab ahead", "shock.avg_length", sh["avg_length"])
+        )
         gap_out = w.get("outflow_gap", sh["gap"])
         slab = sh["gap"] + gap_out + sh["avg_length"]
         parts = "shock.gap + window.outflow_gap + " if "outflow_gap" in w else "2 shock.gap + "
