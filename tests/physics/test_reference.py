@@ -146,11 +146,12 @@ def test_hugoniot_points_satisfy_energy_condition(liquid_ref):
     rho0, E0, P0 = ds.attrs["rho0"], ds.attrs["E0"], ds.attrs["P0"]
     pts = ds.isel(point=slice(1, None))
     assert np.all(pts["converged"].values == 1)
-    # H recomputed here from the stored E, P, ρ and the pole; the stated error H_err holds the
-    # run's block error and the pole's errors.
+    # The stored E, P are the accepted run's state moved along its isochore to H = 0: they
+    # satisfy the energy condition to rounding. The run itself converged: its own residual
+    # ``H`` lies within H_err (its block error and the pole's errors).
     H = pts["E"] - E0 - 0.5 * (pts["P"] + P0) * (1.0 / rho0 - 1.0 / pts["rho"])
-    np.testing.assert_allclose(H.values, pts["H"].values, atol=1e-12)
-    assert np.all(np.abs(H.values) <= pts["H_err"].values)
+    np.testing.assert_allclose(H.values, 0.0, atol=1e-9)
+    assert np.all(np.abs(pts["H"].values) <= pts["H_err"].values)
     assert np.all(pts["H_err"].values > 0)
     # The jump conditions, recomputed.
     dP, dV = pts["P"] - P0, 1.0 / rho0 - 1.0 / pts["rho"]
@@ -225,6 +226,47 @@ def test_interpolate_P_synthetic():
     err = np.max(np.abs(Px / x**-6 - 1.0))
     err_lin = np.max(np.abs(np.interp(x, V[::-1], V[::-1] ** -6) / x**-6 - 1.0))
     assert err < 0.005 and err < err_lin / 3
+
+
+def _root_run(dT: np.ndarray, across: np.ndarray, dEdT: float, dPdT: float) -> dict:
+    """A synthetic accepted run: E and P move with the temperature excursion ``dT`` along
+    the isochore (dE/dT, dP/dT) and with ``across`` in P alone."""
+    E, P = -0.5 + dEdT * dT, 11.0 + dPdT * dT + across
+    s = {"T": 2.5 + dT, "E": E, "P": P, "Pxx": P.copy()}
+    return {"series": s, **{k: float(np.mean(v)) for k, v in s.items()}}
+
+
+def test_state_moved_to_the_root_along_its_isochore():
+    """``_at_root``: a run whose samples scatter only along the isochore pins the Hugoniot
+    state exactly (its error is the pole's alone), while the old rule σ_P ⊕ (dP/dT) σ_H/g
+    called it uncertain; scatter across the isochore is kept in full. The moved state
+    satisfies the energy condition, and a run offset along the isochore lands on the same
+    state."""
+    rng = np.random.default_rng(4)
+    pole = {"V0": 1.25, "E0": -2.0, "P0": 6.0, "E0_err": 0.004, "P0_err": 0.01}
+    dV, dEdT, dPdT = 1.25 - 1.0 / 0.88, 2.2, 2.3
+    g = dEdT - 0.5 * dV * dPdT
+    dT = 0.02 * rng.standard_normal(1000)
+    along = ref._at_root(_root_run(dT, np.zeros(1000), dEdT, dPdT), dEdT, dPdT, dV, pole, 10)
+    k = dPdT / g
+    pole_only = math.hypot(k * pole["E0_err"], 0.5 * dV * k * pole["P0_err"])
+    assert along["P_err"] == pytest.approx(pole_only, rel=1e-6)
+    assert along["dP_err"] == pytest.approx(
+        math.hypot(k * pole["E0_err"], (1 - 0.5 * dV * k) * pole["P0_err"]), rel=1e-6
+    )
+    H = along["E"] - pole["E0"] - 0.5 * (along["P"] + pole["P0"]) * dV
+    assert abs(H) < 1e-12
+    # The same isochore sampled 0.05 hotter: the same root.
+    hot = ref._at_root(_root_run(dT + 0.05, np.zeros(1000), dEdT, dPdT), dEdT, dPdT, dV, pole, 10)
+    for key in ("T", "E", "P"):
+        assert hot[key] == pytest.approx(along[key], abs=1e-9)
+    # White noise across the isochore (P alone, σ = 0.05 a sample): the moved P keeps
+    # (1 − ½ dV k) of it, and its error says so (block error of 1000 samples, ± 25 %).
+    across = ref._at_root(
+        _root_run(dT, 0.05 * rng.standard_normal(1000), dEdT, dPdT), dEdT, dPdT, dV, pole, 10
+    )
+    want = math.hypot((1 + 0.5 * dV * k) * 0.05 / math.sqrt(1000), pole_only)
+    assert across["P_err"] == pytest.approx(want, rel=0.3)
 
 
 # -- (c) against the published equation of state of the same potential ------------------------------
