@@ -70,7 +70,9 @@ def _base_on_axis(spec: Mapping, axis: str, base: Mapping) -> bool:
 
 def _reference_curve(ds: xr.Dataset) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """The reference Hugoniot of an aggregate, sorted by u_p: (u_p, {D, P, D_err, P_err,
-    u_p_err}); missing errors are 0."""
+    u_p_err, P0_err}); missing errors are 0. ``P0_err`` is the error of the reference's own
+    pole (its row at u_p = 0, where it has one): every point's P sits on that pole's
+    Rayleigh line."""
     if not all(f"ref_{k}" in ds for k in ("u_p", "D", "P")):
         return np.empty(0), {}
     u = ds["ref_u_p"].values.astype(float)
@@ -80,7 +82,11 @@ def _reference_curve(ds: xr.Dataset) -> tuple[np.ndarray, dict[str, np.ndarray]]
         cols[k + "_err"] = ds[e].values.astype(float) if e in ds else np.zeros_like(u)
     ok = np.isfinite(u) & (u > 0) & np.isfinite(cols["D"]) & np.isfinite(cols["P"])
     order = np.argsort(u[ok])
-    return u[ok][order], {k: v[ok][order] for k, v in cols.items()}
+    out = {k: v[ok][order] for k, v in cols.items()}
+    at_pole = np.flatnonzero(u == 0.0)
+    p0_err = float(cols["P_err"][at_pole[0]]) if at_pole.size else 0.0
+    out["P0_err"] = np.full(int(ok.sum()), p0_err if np.isfinite(p0_err) else 0.0)
+    return u[ok][order], out
 
 
 def _reference_name(ds: xr.Dataset) -> str:
@@ -107,8 +113,12 @@ def reference_at(u: float, ru: np.ndarray, ref: Mapping[str, np.ndarray]) -> dic
     (for the LJ liquid 0.5-0.8 of σ_D; an EOS's D(u) has σ_u = 0 and keeps σ_D); the two
     bracketing points' errors are independent (separate runs) and weigh in as the
     interpolation weighs them, in quadrature; P moves by rho0 u times D's (the points stay
-    on the pole's Rayleigh line). P's error as stated, at fixed density, was 3-4 times the
-    seeds' scatter of window points' P about the reference at their u_p."""
+    on the pole's Rayleigh line) and with that pole's P0 (``P0_err``, where the reference
+    has a pole: P = P0 + rho0 D u; D's own share of the pole's error is small, since a pole
+    sampled hot moves the shocked state's P with P0). P's error as stated, at fixed density,
+    was 3-4 times the seeds' scatter of window points' P about the reference at their u_p;
+    without the P0 term, the eight replica seeds' equilibrium references scattered at fixed
+    u by 1.8 times the stated P error."""
     keys = ("D", "P", "D_err", "P_err", "D_slope", "P_slope")
     nan = dict.fromkeys(keys, math.nan)
     if ru.size < 2 or not (ru[0] <= u <= ru[-1]):
@@ -128,7 +138,8 @@ def reference_at(u: float, ru: np.ndarray, ref: Mapping[str, np.ndarray]) -> dic
         rho0 = (ref["P"][b] - ref["P"][a]) / (flux_b - flux_a)
         out["P"] = float(ref["P"][a] + rho0 * (out["D"] * u - flux_a))
         out["P_slope"] = float(rho0 * (out["D"] + u * slope))
-        out["P_err"] = float(abs(rho0 * u) * out["D_err"])
+        p0_err = float(ref["P0_err"][a]) if "P0_err" in ref else 0.0
+        out["P_err"] = float(math.hypot(rho0 * u * out["D_err"], p0_err))
     return out
 
 
