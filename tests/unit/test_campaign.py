@@ -352,6 +352,44 @@ def test_reference_errors_at_fixed_u_follow_the_points_along_their_rayleigh_rays
     assert 1.8 < float(np.interp(1.45, u_true, stated["D_err"])) / at["D_err"] < 2.4
 
 
+def test_reference_P_at_fixed_u_carries_its_pole():
+    """Reference: 4000 draws as above, the pole's P0 drawn too (σ_P0 = 0.04) and every
+    point's P moving with it (an equilibrium reference's pole sampled hot moves the shocked
+    states' P with P0, so the jumps P − P0, and u and D, do not see it). At fixed u,
+    P = P0 + rho0 D u scatters by rho0 u σ_D ⊕ σ_P0: reference_at states that within 6 %
+    when the curve gives ``P0_err``, and 0.7 times it without. ``_reference_curve`` takes
+    P0_err from the reference's row at u_p = 0."""
+    c0, s, rho0, P0, sP, sP0 = 4.0, 1.5, 0.8, 6.0, 0.05, 0.04
+    u_true = np.array([0.8, 1.2, 1.7, 2.2])
+    D_true = c0 + s * u_true
+    P_true = P0 + rho0 * D_true * u_true
+    V0, V = 1 / rho0, (1 / rho0) * (1 - u_true / D_true)
+    rel = 0.5 * sP / (P_true - P0)
+    stated = {"D": D_true, "P": P_true, "D_err": D_true * rel, "P_err": np.full(4, sP),
+              "u_p_err": u_true * rel, "P0_err": np.full(4, sP0)}  # fmt: skip
+    rng = np.random.default_rng(12)
+    draws = []
+    for _ in range(4000):
+        p0 = P0 + sP0 * rng.standard_normal()
+        P = P_true + sP * rng.standard_normal(4) + (p0 - P0)
+        u, D = np.sqrt((P - p0) * (V0 - V)), V0 * np.sqrt((P - p0) / (V0 - V))
+        draws.append(
+            cp.reference_at(1.45, u, {"D": D, "P": P, "D_err": D * 0, "P_err": P * 0})["P"]
+        )
+    sd = float(np.std(draws))
+    assert cp.reference_at(1.45, u_true, stated)["P_err"] == pytest.approx(sd, rel=0.06)
+    no_pole = {k: v for k, v in stated.items() if k != "P0_err"}
+    assert cp.reference_at(1.45, u_true, no_pole)["P_err"] < 0.8 * sd
+    ds = xr.Dataset(
+        {f"ref_{k}": ("ref_point", np.concatenate([[x0], v]))
+         for k, x0, v in (("u_p", 0.0, u_true), ("D", np.nan, D_true), ("P", P0, P_true),
+                          ("P_err", sP0, stated["P_err"]), ("D_err", np.nan, stated["D_err"]))}
+    )  # fmt: skip
+    ru, ref = cp._reference_curve(ds)
+    np.testing.assert_allclose(ru, u_true)
+    np.testing.assert_allclose(ref["P0_err"], sP0)
+
+
 def test_reference_deviation_counts_the_u_error_and_its_correlation():
     """e = x/x_ref(u) − 1 with s² = (σ_x/x_r)² + (x σ_r/x_r²)² + (x x_r' σ_u/x_r²)²
     − 2 corr (σ_x/x_r)(x x_r' σ_u/x_r²): a point that slides along the reference (P and u
