@@ -117,8 +117,8 @@ def reference_at(u: float, ru: np.ndarray, ref: Mapping[str, np.ndarray]) -> dic
     has a pole: P = P0 + rho0 D u; D's own share of the pole's error is small, since a pole
     sampled hot moves the shocked state's P with P0). P's error as stated, at fixed density,
     was 3-4 times the seeds' scatter of window points' P about the reference at their u_p;
-    without the P0 term, the eight replica seeds' equilibrium references scattered at fixed
-    u by 1.8 times the stated P error."""
+    without the P0 term, eight equilibrium references of the default liquid (seeds 1-8,
+    each measuring its own pole) scattered at fixed u by 1.8 times the stated P error."""
     keys = ("D", "P", "D_err", "P_err", "D_slope", "P_slope")
     nan = dict.fromkeys(keys, math.nan)
     if ru.size < 2 or not (ru[0] <= u <= ru[-1]):
