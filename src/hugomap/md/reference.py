@@ -391,22 +391,16 @@ def _at_root(
 ) -> dict[str, float]:
     """The accepted run's state moved along its isochore to the root of H, with errors.
 
-    The run sits at |H| < h_tol_sigma σ_H, not at H = 0. Along the isochore, T, E, P and
-    P_xx move with T by (1, dE/dT, dP/dT), and H by g = dE/dT − ½(V0 − V) dP/dT, so the state
-    at H = 0 is X* = X − (dX/dT / g) H (the fluctuation slopes of the runs: the step is
-    below σ_H/g, so their roughness is second order). Its error is the block error of the
-    per-sample series X_i − (dX/dT / g) h_i, which holds the correlation of X with H: a
-    sample run hot has high E and P, and so a high H, and moving it to the root takes that
-    back out (on the liquid at ρ/ρ0 = 1.1 and 1.25, 864 atoms, ten seeds at one pole, the
-    corrected P scattered by 0.016 and 0.022 ε σ⁻³ against errors of 0.013 and 0.025; the
-    uncorrected P by 0.021 and 0.034 against σ_P ⊕ (dP/dT) σ_H/g of 0.033 and 0.065). The
-    pole enters through H (−E0 − ½ P0 (V0 − V)): X* moves by k_X (δE0 + ½ (V0 − V) δP0) and
-    the jump P* − P0 by k_P δE0 − (1 − ½ (V0 − V) k_P) δP0. With the pole's series
-    (``pole``) those errors are the block errors of the same combinations of its samples:
-    a pole sampled hot has high E0 and P0 together, which moves P* with P0 and leaves the
-    jump nearly alone (eight seeds of the default liquid's reference at ρ/ρ0 = 1.1-1.25:
-    D's reduced χ² about the seeds' mean 0.46 with E0 and P0 taken as independent, 0.71
-    with the pole's series). Without the series they are taken as independent."""
+    The run sits at |H| < h_tol_sigma σ_H, not at H = 0. Along the isochore T, E, P, P_xx
+    move with T by (1, dE/dT, dP/dT) and H by g = dE/dT − ½(V0 − V) dP/dT, so the state at
+    H = 0 is X* = X − (dX/dT / g) H (the runs' fluctuation slopes; the step is below σ_H/g,
+    so their roughness is second order). Its error is the block error of the per-sample
+    series X_i − (dX/dT / g) h_i, which keeps the correlation of X with H (a sample run hot
+    has high E, P and H). The pole enters through H: X* moves by k_X (δE0 + ½(V0 − V) δP0),
+    the jump P* − P0 (``dP_err``) by k_P δE0 − (1 − ½(V0 − V) k_P) δP0, each error the block
+    error of that combination of the pole's samples (a pole sampled hot moves P* with P0),
+    or, without the pole's series, of E0 and P0 taken as independent. Measured against
+    seeds in docs/window-methods.md, "The reference's own errors"."""
     s = run["series"]
     g = dEdT - 0.5 * dV * dPdT
     if not g > 0:
