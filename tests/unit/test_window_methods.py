@@ -17,7 +17,15 @@ import pytest
 
 from hugomap.analysis.stats import CorrelatedSlope, line_fit
 from hugomap.window import dichotomy as dich
-from hugomap.window.methods import OmegaSignal, amw, fixed_run, mw, steered_out_scatter
+from hugomap.window.methods import (
+    ControlHistory,
+    OmegaSignal,
+    _diverging,
+    amw,
+    fixed_run,
+    mw,
+    steered_out_scatter,
+)
 from hugomap.window.synthetic import SyntheticFront
 
 C0, S, U_P = 7.0, 1.5, 2.0
@@ -246,6 +254,23 @@ def test_mw_slope_error_holds_for_a_wandering_front():
     assert n >= 100
     assert hits_ar1 / n < 0.7
     assert hits_mw / n >= 0.85
+
+
+def test_early_slopes_are_judged_against_the_noise_measured_later():
+    """MW run s4 at u_p = 1 (the replica study's slopes, 10⁻³ τ⁻¹): its first four windows
+    were recorded with fit errors of 0.6-1.0 before the slopes' scatter could be measured,
+    so −3.63, 1.97, −1.89 and 4.9 read as four undecayed lobes (`oscillating`). Against
+    the scatter measured by the seventh window, 1.58, only −3.63 and 4.9 are beyond 2
+    errors: two lobes, no oscillation. A ringing whose lobes stand far above that noise
+    (AMW with β = 2 on the synthetic front, above) is still caught."""
+    h = ControlHistory(
+        a=[v * 1e-3 for v in (1.93, -3.63, 1.97, -0.01, 0.06, -1.89, 4.9)],
+        a_err=[v * 1e-3 for v in (1.04, 0.73, 0.82, 0.57, 0.44, 0.85, 1.58)],
+    )
+    assert _diverging(h, 2.0)[0] == "oscillating"
+    assert _diverging(h, 2.0, noise=1.58e-3) is None
+    ring = ControlHistory(a=[4e-3, -4e-3, 4e-3, -4e-3], a_err=[1e-3] * 4)
+    assert _diverging(ring, 2.0, noise=1.5e-3)[0] == "oscillating"
 
 
 def test_mw_holding_a_speed_below_c0_is_marked_no_shock():

@@ -164,8 +164,12 @@ def _check_inside(w: np.ndarray, margin: float) -> str | None:
     return None
 
 
-def _diverging(h: ControlHistory, z: float, floor: float = 0.0) -> tuple[str, str] | None:
-    """Failure read from the slopes a_k that are significant (|a_k| > z s_k).
+def _diverging(
+    h: ControlHistory, z: float, floor: float = 0.0, noise: float = 0.0
+) -> tuple[str, str] | None:
+    """Failure read from the slopes a_k that are significant (|a_k| > z s_k, s_k at least
+    ``noise``: the slopes' own scatter as measured so far, which the first windows, recorded
+    before it could be measured, are judged against too).
 
     A correction of gain g multiplies the front speed by (1 − g) per window (AMW: g = β),
     so over-correction shows as slopes of alternating sign:
@@ -174,7 +178,7 @@ def _diverging(h: ControlHistory, z: float, floor: float = 0.0) -> tuple[str, st
       peak |a| is at least 0.7 of the peak one period (two lobes) earlier: an oscillation
       that does not decay (AMW's β = 2; an MW whose gains and response delay ring).
     AMW with β ∈ (1, 2) overshoots but decays (|1 − β| < 1) and is not flagged."""
-    a, se = np.asarray(h.a), np.asarray(h.a_err)
+    a, se = np.asarray(h.a), np.maximum(np.asarray(h.a_err), noise)
     significant = (np.abs(a) > z * se) & (np.abs(a) > floor)
     sig = a[significant]
     if a.size >= 3 and significant[-3:].all():
@@ -291,7 +295,8 @@ def _control(
         a, se, _ = slopes.fit(t, w)
         se = flat_omega_error(signal, t, w, se)
         scatter = steered_out_scatter([*h.a, a], h.du, L, response)
-        se = max(se, scatter) if np.isfinite(scatter) else se
+        scatter = scatter if np.isfinite(scatter) else 0.0
+        se = max(se, scatter)
         bad = _check_inside(w, edge_margin)
         if bad:
             _record(h, solver, t, w, a, se, 0.0)
@@ -311,7 +316,7 @@ def _control(
                 f"drift speed {max_drift:.3g} in {coarse} windows: lengthen window_time",
                 k + 1,
             ), h  # fmt: skip
-        failed = _diverging(h, z, floor)
+        failed = _diverging(h, z, floor, scatter)
         if failed:
             return ControlResult(False, failed[0], failed[1], k + 1), h
         apply(du)
