@@ -23,6 +23,7 @@ import pytest
 import xarray as xr
 
 from hugomap.failures import SolverUnstable
+from hugomap.md import nvt
 from hugomap.md import reference as ref
 from hugomap.md.potential import LJParams
 
@@ -320,14 +321,14 @@ def test_crystal_pole_hugoniot_runs():
 
 
 def test_unstable_run_is_repeated_with_half_the_step(monkeypatch):
-    real = ref._run_nvt
+    real = nvt._run_nvt
 
     def flaky(*args):
         if args[4] == 0.004:  # dt
             raise SolverUnstable("cfl", "test")
         return real(*args)
 
-    monkeypatch.setattr(ref, "_run_nvt", flaky)
+    monkeypatch.setattr(nvt, "_run_nvt", flaky)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         m = ref.measure_state(0.8, 2.0, LJTS, cells=(4, 4, 4), n_equil=50, n_prod=200,
