@@ -229,12 +229,15 @@ def test_interpolate_P_synthetic():
     assert err < 0.005 and err < err_lin / 3
 
 
-def _root_run(dT: np.ndarray, across: np.ndarray, dEdT: float, dPdT: float) -> dict:
+def _root_run(
+    dT: np.ndarray, across: np.ndarray, dEdT: float, dPdT: float, pole: dict, dV: float
+) -> dict:
     """A synthetic accepted run: E and P move with the temperature excursion ``dT`` along
-    the isochore (dE/dT, dP/dT) and with ``across`` in P alone."""
+    the isochore (dE/dT, dP/dT) and with ``across`` in P alone; ``h`` its H per sample."""
     E, P = -0.5 + dEdT * dT, 11.0 + dPdT * dT + across
     s = {"T": 2.5 + dT, "E": E, "P": P, "Pxx": P.copy()}
-    return {"series": s, **{k: float(np.mean(v)) for k, v in s.items()}}
+    h = E - pole["E0"] - 0.5 * (P + pole["P0"]) * dV
+    return {"series": s, "h": h, **{k: float(np.mean(v)) for k, v in s.items()}}
 
 
 def test_state_moved_to_the_root_along_its_isochore():
@@ -248,7 +251,9 @@ def test_state_moved_to_the_root_along_its_isochore():
     dV, dEdT, dPdT = 1.25 - 1.0 / 0.88, 2.2, 2.3
     g = dEdT - 0.5 * dV * dPdT
     dT = 0.02 * rng.standard_normal(1000)
-    along = ref._at_root(_root_run(dT, np.zeros(1000), dEdT, dPdT), dEdT, dPdT, dV, pole, 10)
+    along = ref._at_root(
+        _root_run(dT, np.zeros(1000), dEdT, dPdT, pole, dV), dEdT, dPdT, dV, pole, 10
+    )
     k = dPdT / g
     pole_only = math.hypot(k * pole["E0_err"], 0.5 * dV * k * pole["P0_err"])
     assert along["P_err"] == pytest.approx(pole_only, rel=1e-6)
@@ -258,13 +263,20 @@ def test_state_moved_to_the_root_along_its_isochore():
     H = along["E"] - pole["E0"] - 0.5 * (along["P"] + pole["P0"]) * dV
     assert abs(H) < 1e-12
     # The same isochore sampled 0.05 hotter: the same root.
-    hot = ref._at_root(_root_run(dT + 0.05, np.zeros(1000), dEdT, dPdT), dEdT, dPdT, dV, pole, 10)
+    hot = ref._at_root(
+        _root_run(dT + 0.05, np.zeros(1000), dEdT, dPdT, pole, dV), dEdT, dPdT, dV, pole, 10
+    )
     for key in ("T", "E", "P"):
         assert hot[key] == pytest.approx(along[key], abs=1e-9)
     # White noise across the isochore (P alone, σ = 0.05 a sample): the moved P keeps
     # (1 − ½ dV k) of it, and its error says so (block error of 1000 samples, ± 25 %).
     across = ref._at_root(
-        _root_run(dT, 0.05 * rng.standard_normal(1000), dEdT, dPdT), dEdT, dPdT, dV, pole, 10
+        _root_run(dT, 0.05 * rng.standard_normal(1000), dEdT, dPdT, pole, dV),
+        dEdT,
+        dPdT,
+        dV,
+        pole,
+        10,
     )
     want = math.hypot((1 + 0.5 * dV * k) * 0.05 / math.sqrt(1000), pole_only)
     assert across["P_err"] == pytest.approx(want, rel=0.3)

@@ -163,7 +163,7 @@ def hugoniot_point(
     for it in range(max_iter):
         m = measure_state(rho, T, lj, seed=_derived_seed(seed, it), keep_series=True, **kwargs)
         s = m["series"]
-        h = s["E"] - E0 - 0.5 * (s["P"] + P0) * dV
+        m["h"] = h = s["E"] - E0 - 0.5 * (s["P"] + P0) * dV  # H per sample
         m["H"], m["H_sigma"] = block_average(h, n_blocks)
         hc = h - h.mean()
         m["dHdT_fluct"] = float(m["n_atoms"] * np.mean(hc * (s["E"] - s["E"].mean())) / m["T"] ** 2)
@@ -216,7 +216,8 @@ def hugoniot_point(
 def _at_root(
     run: dict[str, Any], dEdT: float, dPdT: float, dV: float, pole: dict[str, Any], n_blocks: int
 ) -> dict[str, float]:
-    """The accepted run's state moved along its isochore to the root of H, with errors.
+    """The accepted run's state (its ``series`` and H per sample ``h``) moved along its
+    isochore to the root of H, with errors.
 
     The run sits at |H| < h_tol_sigma σ_H, not at H = 0. Along the isochore T, E, P, P_xx
     move with T by (1, dE/dT, dP/dT) and H by g = dE/dT − ½(V0 − V) dP/dT, so the state at
@@ -228,11 +229,10 @@ def _at_root(
     error of that combination of the pole's samples (a pole sampled hot moves P* with P0),
     or, without the pole's series, of E0 and P0 taken as independent. Measured against
     seeds in docs/window-methods.md, "The reference's own errors"."""
-    s = run["series"]
+    s, h = run["series"], run["h"]
     g = dEdT - 0.5 * dV * dPdT
     if not g > 0:
         raise ValueError(f"dH/dT = {g:.4g} along the isochore: not positive, no root to move to")
-    h = s["E"] - pole["E0"] - 0.5 * (s["P"] + pole["P0"]) * dV
     ps = pole.get("series")
 
     def pole_err(c_E: float, c_P: float) -> float:

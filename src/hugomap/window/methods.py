@@ -274,8 +274,8 @@ def _control(
     corrected for correlated samples, ``stats.CorrelatedSlope``, and at least the slopes'
     own scatter with the steering undone, ``steered_out_scatter`` with the steering's
     ``response``: 1 for AMW's Galilean shifts, None (fitted) for MW's outflow), stop if
-    the front left the window or the slopes diverge or
-    oscillate, count the windows with |a| ≤ z s_a, else ``apply(correction(a, ω))``.
+    the front left the window or the slopes diverge or oscillate (judged against that
+    scatter too), count the windows with |a| ≤ z s_a, else ``apply(correction(a, ω))``.
 
     ``max_drift`` [velocity]: the front-speed resolution z s_a L a calm window must reach.
     A window whose slope is 'zero' only because its error is huge proves nothing; when
