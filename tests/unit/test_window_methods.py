@@ -25,6 +25,7 @@ from hugomap.window.methods import (
     fixed_run,
     mw,
     steered_out_scatter,
+    steering_response,
 )
 from hugomap.window.synthetic import SyntheticFront
 
@@ -226,6 +227,34 @@ def test_steered_out_scatter_fits_an_unknown_response():
     assert np.sqrt(np.mean(np.square(fitted))) == pytest.approx(sd, rel=0.15)
     assert np.sqrt(np.mean(np.square(fixed))) > 1.2 * sd
     assert np.isnan(steered_out_scatter([1e-3] * 4, [0.1] * 3, L, None))  # 2 differences
+
+
+def test_steering_response_recovers_the_response_of_a_noiseless_front():
+    """a_{k+1} − a_k = r Δu_k/L exactly (r = 2.65): the fit returns r; before four pairs,
+    or with no step taken, there is nothing to fit."""
+    L, r = 100.0, 2.65
+    du = [0.3, -0.2, 0.15, -0.1, 0.05, 0.02]
+    a = np.concatenate([[0.01], 0.01 + r * np.cumsum(du) / L])
+    assert steering_response(list(a), du, L) == pytest.approx(r, rel=1e-12)
+    assert np.isnan(steering_response(list(a[:4]), du[:3], L))
+    assert np.isnan(steering_response([1e-3] * 6, [0.0] * 5, L))
+
+
+@pytest.mark.parametrize("seed", range(1, 9))
+def test_mw_divides_its_gains_by_the_fitted_response(seed):
+    """A front whose speed answers a step of u_out by s = 3.5 times (the synthetic model's
+    response is its Hugoniot slope s; MW's on the LJ liquid at u_p = 1 was 1.5-3.6 run by
+    run): with the default gains (0.5, 0.05) as set, each step overshoots (0.5 × 3.5 =
+    1.75) and 6 of these 8 seeds ring (``oscillating``); with the gains divided by the
+    response fitted from the run's own windows, every seed finds the amplitude."""
+    s = 3.5
+    d = C0 + s * U_P
+    f = SyntheticFront(C0, s, -d, -d + U_P + 0.5, noise=0.0005, tau_c=0.1, seed=seed)
+    res, h = mw(f, _signal(f), gain_rate=0.5, gain_position=0.05, target=0.6,
+                window_time=T_WIN, calm_windows=3, max_windows=30, every=10)  # fmt: skip
+    assert res.converged and res.status == "ok", res
+    assert steering_response(h.a, h.du, 50.0) == pytest.approx(s, rel=0.1)
+    assert abs((f.u_out - f.u_in) - U_P) <= 2 * _resolution(h) / s
 
 
 def test_mw_slope_error_holds_for_a_wandering_front():

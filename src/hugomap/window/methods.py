@@ -245,13 +245,31 @@ def steered_out_scatter(
     a_, du_ = np.asarray(a, dtype=float), np.asarray(du, dtype=float)
     if a_.size < (4 if response is not None else 5) or du_.size < a_.size - 1:
         return float("nan")
-    x, y = du_[1 : a_.size - 1] / length, a_[2:] - a_[1:-1]
+    x, y = _steering_pairs(a_, du_, length)
     fitted = response is None
     if fitted:
-        sxx = float(np.sum(x * x))
-        response = float(np.sum(x * y)) / sxx if sxx > 0 else 0.0
+        response = steering_response(a_, du_, length)
     d = y - response * x
     return float(np.sqrt(np.sum(d * d) / (2.0 * (d.size - int(fitted)))))
+
+
+def _steering_pairs(a: np.ndarray, du: np.ndarray, length: float) -> tuple:
+    """(Δu_k/L, a_{k+1} − a_k) for k = 1..: the steps and the slope changes they caused
+    (window 0, which still carries the start's transient, left out)."""
+    return du[1 : a.size - 1] / length, a[2:] - a[1:-1]
+
+
+def steering_response(a, du, length: float) -> float:
+    """The response r of the slope to a step of the steering, a_{k+1} − a_k ≈ r Δu_k/L:
+    the least-squares slope through the origin of the pairs ``_steering_pairs`` (windows
+    0..k in ``a``, the steps after windows 0..k−1 in ``du``); NaN before four pairs, or
+    with no step taken. Slopes in 1/time, steps in velocity, ``length`` L."""
+    a_, du_ = np.asarray(a, dtype=float), np.asarray(du, dtype=float)
+    if a_.size < 5 or du_.size < a_.size - 1:
+        return float("nan")
+    x, y = _steering_pairs(a_, du_, length)
+    sxx = float(np.sum(x * x))
+    return float(np.sum(x * y)) / sxx if sxx > 0 else float("nan")
 
 
 def _control(
@@ -372,20 +390,32 @@ def mw(
     on_window: Callable[[], None] | None = None,
     max_drift: float | None = None,
 ) -> tuple[ControlResult, ControlHistory]:
-    """MW (module docstring): the inflow is held and u_out is steered.
+    """MW (module docstring): the inflow is held and u_out is steered by
+    Δu = −(g_rate L a_k + g_pos L (ω̄_k − target)) / max(r, 1).
+
+    The gains are for a unit response. A step of u_out moves the next slope by r Δu/L,
+    and r is not 1: the front answers through the waves the step sends into the window
+    (eight MW runs on the LJ liquid at u_p = 1: r = 1.5-3.6, so the rate gain 0.5 took
+    1.3 of the slope away per window and each step overshot). Once it can be fitted from
+    the run's own windows (``steering_response``, from the fifth), r divides both gains;
+    a fitted r below 1 leaves them as set.
 
     A run that settles with the amplitude u_out − u_in below a quarter of its start ends as
     ``no_shock``: MW holds D, and below the sound speed no shock matches it, so MW lowers the
     amplitude towards nothing (weak shocks whose loading D guess fell below c0)."""
     L = solver.geom.length
     u_p0 = solver.u_out - solver.u_in
+    h = history or ControlHistory()
 
     def correction(a: float, w: np.ndarray) -> float:
-        return -gain_rate * L * a - gain_position * L * (float(np.mean(w)) - target)
+        # the gains are for a unit response; the measured one, once fitted, divides them
+        r = steering_response([*h.a, a], h.du, L)
+        gain = 1.0 / r if np.isfinite(r) and r > 1.0 else 1.0
+        return -gain * (gain_rate * L * a + gain_position * L * (float(np.mean(w)) - target))
 
     result, h = _control(
         solver, signal, correction, lambda du: solver.set_outflow(solver.u_out + du),
-        window_time, calm_windows, max_windows, every, z, edge_margin, history, on_window,
+        window_time, calm_windows, max_windows, every, z, edge_margin, h, on_window,
         max_drift, response=None,
     )  # fmt: skip
     amplitude = solver.u_out - solver.u_in
