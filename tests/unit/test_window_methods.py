@@ -227,6 +227,10 @@ def test_steered_out_scatter_fits_an_unknown_response():
     assert np.sqrt(np.mean(np.square(fitted))) == pytest.approx(sd, rel=0.15)
     assert np.sqrt(np.mean(np.square(fixed))) > 1.2 * sd
     assert np.isnan(steered_out_scatter([1e-3] * 4, [0.1] * 3, L, None))  # 2 differences
+    # no step taken: nothing to undo, the slopes' own scatter (3 differences of 2e-3, 1 dof
+    # taken by the fit)
+    a0 = [0.0, 1e-3, -1e-3, 1e-3, -1e-3]
+    assert steered_out_scatter(a0, [0.0] * 4, L, None) == pytest.approx(np.sqrt(3 * 4e-6 / 4))
 
 
 def test_steering_response_recovers_the_response_of_a_noiseless_front():

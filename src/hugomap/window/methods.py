@@ -248,7 +248,8 @@ def steered_out_scatter(
     x, y = _steering_pairs(a_, du_, length)
     fitted = response is None
     if fitted:
-        response = steering_response(a_, du_, length)
+        r = steering_response(a_, du_, length)
+        response = r if np.isfinite(r) else 0.0  # no step taken: the slopes' own scatter
     d = y - response * x
     return float(np.sqrt(np.sum(d * d) / (2.0 * (d.size - int(fitted)))))
 
@@ -396,9 +397,9 @@ def mw(
     The gains are for a unit response. A step of u_out moves the next slope by r Δu/L,
     and r is not 1: the front answers through the waves the step sends into the window
     (eight MW runs on the LJ liquid at u_p = 1: r = 1.5-3.6, so the rate gain 0.5 took
-    1.3 of the slope away per window and each step overshot). Once it can be fitted from
-    the run's own windows (``steering_response``, from the fifth), r divides both gains;
-    a fitted r below 1 leaves them as set.
+    0.75-1.8 of the slope away per window, and the larger steps overshot). Once it can be
+    fitted from the run's own windows (``steering_response``, from the fifth), r divides
+    both gains; a fitted r below 1 leaves them as set.
 
     A run that settles with the amplitude u_out − u_in below a quarter of its start ends as
     ``no_shock``: MW holds D, and below the sound speed no shock matches it, so MW lowers the
