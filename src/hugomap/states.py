@@ -108,7 +108,9 @@ class ControlParams:
     front's place in the window, ω*); ``outflow_gap``: the measured slab behind the front
     stays this far from the outflow edge; ``gap`` and ``avg_length``: the measured slabs'
     distance from the front and their length (``shock.gap``, ``shock.avg_length``), in the
-    window's length unit, as ``PistonFrame`` carries them for a piston run."""
+    window's length unit, as ``PistonFrame`` carries them for a piston run;
+    ``max_average_time``: how long a steady average (AMW/MW's, the dichotomy's final one)
+    may go on while its point is unresolved (``window.steady.steady_state``)."""
 
     window_time: float
     average_time: float
@@ -126,6 +128,7 @@ class ControlParams:
     outflow_gap: float
     gap: float
     avg_length: float
+    max_average_time: float = 0.0
 
     @classmethod
     def from_window(
@@ -137,7 +140,8 @@ class ControlParams:
         averaging window and its final average as AMW/MW's unless configured; max_drift =
         drift_fraction L/average_time for a window of ``length``; MW's gain_position per
         window_time; the slab behind the front ``window.outflow_gap`` (default ``gap``) from
-        the outflow edge."""
+        the outflow edge; ``window.max_average_time`` where the block has one (else no
+        average goes on past its own time)."""
         wt, avg = times if times is not None else (w["window_time"], w["average_time"])
         d = w["dichotomy"]
         return cls(
@@ -148,6 +152,7 @@ class ControlParams:
             gain_rate=float(w["mw"]["gain_rate"]),
             gain_position=float(w["mw"]["gain_position"]) / wt, target=w["front_fraction"],
             outflow_gap=w.get("outflow_gap") or gap, gap=gap, avg_length=avg_length,
+            max_average_time=float(w.get("max_average_time") or 0.0),
         )  # fmt: skip
 
 

@@ -89,6 +89,7 @@ POINT_VARS: dict[str, tuple[str, str]] = {
         "point (its jump is taken at the slab's velocity)",
     ),
     "n_samples": ("1", "profile samples averaged"),
+    "average_time": ("tau", "window points: how long the steady state was averaged"),
     "wall_s": ("s", "wall-clock time of the point (load + drive)"),
     "cpu_s": ("s", "CPU time of the point (load + drive), all threads"),
     "atom_steps": ("1", "atoms x time steps of the point (load + drive)"),

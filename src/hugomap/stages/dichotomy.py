@@ -115,7 +115,8 @@ def dichotomy_point(
     h = None
     try:
         values, h = steady_state(win, profile, pole, sig, cp.final_time, cp.every, cp.gap,
-                                 cp.avg_length, sh["residual_tol"], cp.outflow_gap)  # fmt: skip
+                                 cp.avg_length, sh["residual_tol"], cp.outflow_gap,
+                                 cp.max_average_time)  # fmt: skip
         status, diagnostic = str(values.pop("status")), str(values.pop("diagnostic"))
         log.info("dichotomy: D = %.6g +- %.2g, P = %.6g, %s", values["D"], values["D_err"],
                  values["P"], status)  # fmt: skip

@@ -23,6 +23,15 @@ from .methods import OmegaSignal, flat_omega_error
 from .protocol import WindowSolver
 
 
+def unresolved(values: dict, residual_tol: float) -> bool:
+    """Whether a point's average is too short to judge it: one of its jump residuals' errors
+    (mass, momentum, energy) exceeds ``residual_tol``, so a residual of the tolerance could
+    not be told from zero. It reads the errors only, never the residuals, so averaging on
+    while it holds cannot pick out the points that happen to close."""
+    errs = [values.get(f"residual_{k}_err", np.nan) for k in ("mass", "momentum", "energy")]
+    return any(bool(e > residual_tol) for e in errs)
+
+
 def steady_state(
     win: WindowSolver,
     profile: Profile,
@@ -34,10 +43,19 @@ def steady_state(
     avg_length: float,
     residual_tol: float,
     left_gap: float | None = None,
+    max_duration: float | None = None,
 ) -> tuple[dict, dict[str, np.ndarray]]:
     """Average the steady wave for ``duration`` (module docstring); returns the point's
     values and the samples (t, front, x_left, x_right, sums, stage, omega, and the slab
     behind's u relative to the upstream and P_xx: u_slab, P_slab).
+
+    With ``max_duration`` > ``duration`` the average goes on, ``duration`` at a time and
+    measured again over every sample, while the point is ``unresolved`` (a residual's error
+    above ``residual_tol``), up to ``max_duration``; ``average_time`` says how long it
+    ran. The slab behind a weak front keeps its noise for long (the LJ liquid at u_p = 1:
+    integrated correlation time 2.4-9.7 τ, so 20 τ hold one to four independent samples
+    and its energy residual's error is 0.7-6.5 %; 100 τ: D within 0.16 % sd of the
+    reference over eight seeds).
 
     A particle count that never changed over the average (the front moved less than one
     particle's worth, L/|q_sh − q_up|) gets that quantum's uncertainty instead of the fit's
@@ -45,15 +63,37 @@ def steady_state(
     the larger of the AR(1)-corrected one and its scatter over four spans, with ω a bounded
     signal (``stats.slope_scatter``)."""
     g = win.geom
-    n = max(16, int(round(duration / (every * max(win.dt, 1e-300)))))
-    t, front, sums_all, omega = [], [], [], []
-    for _ in range(n):
-        win.advance(every)
-        omega.append(signal(win))
-        sums = profile.sums(win)
-        t.append(win.time)
-        front.append(track_front(profile, sums, g.x_lo, g.x_hi, win.u_out, win.u_in))
-        sums_all.append(sums)
+    step = max(win.dt, 1e-300) * every
+    n = max(16, int(round(duration / step)))
+    n_max = max(n, int(round((max_duration or 0.0) / step)))
+    t: list[float] = []
+    front: list[float] = []
+    sums_all: list[np.ndarray] = []
+    omega: list[float] = []
+    while True:
+        for _ in range(min(n, n_max - len(t)) if t else n):
+            win.advance(every)
+            omega.append(signal(win))
+            sums = profile.sums(win)
+            t.append(win.time)
+            front.append(track_front(profile, sums, g.x_lo, g.x_hi, win.u_out, win.u_in))
+            sums_all.append(sums)
+        r, h = _measure(win, profile, pole, signal, t, front, sums_all, omega, gap, avg_length,
+                        residual_tol, left_gap)  # fmt: skip
+        if len(t) >= n_max or not unresolved(r, residual_tol):
+            break
+    r["average_time"] = float(len(t) * step)
+    return r, h
+
+
+def _measure(
+    win: WindowSolver, profile: Profile, pole: Pole, signal: OmegaSignal, t: list, front: list,
+    sums_all: list, omega: list, gap: float, avg_length: float, residual_tol: float,
+    left_gap: float | None,
+) -> tuple[dict, dict[str, np.ndarray]]:  # fmt: skip
+    """The point from the samples so far (``steady_state``)."""
+    g = win.geom
+    n = len(t)
     t_a, om = np.asarray(t), np.asarray(omega)
     a, se, _ = CorrelatedSlope().fit(t_a, om)
     # ω wiggles with the front about its drift, bounded in a held frame (stats.slope_scatter)
