@@ -425,6 +425,23 @@ def test_a_point_whose_state_ahead_is_off_the_pole_is_not_ok():
         assert ("state ahead off the pole" in r["diagnostic"]) == (status != "ok")
 
 
+def test_material_ahead_that_arrives_warm_is_off_the_pole():
+    """The state behind the exact jump from the pole, the material ahead at rest at ρ0, P0
+    but warmer: E − E0 = 0.02 (2.4 % of the jump E − E0 = 0.83, far beyond its noise) moves
+    the energy residual taken from it by that much, so the point is not ok, its residuals
+    from the pole closed (a window's live inflow at weak shocks: +0.066 ε, 10 % of the jump,
+    on the default liquid's AMW at u_p = 0.5); at 0.004 (0.5 %) it is ok."""
+    from hugomap.analysis.shock import measure_point
+
+    for dE, status in ((0.02, "not_converged"), (0.004, "ok")):
+        h, pole = _toy_run(0.0, 0.0005, ahead=(0.0, 1.0, 1.0, dE))
+        r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                          residual_tol=0.01)  # fmt: skip
+        assert abs(r["residual_energy"]) < 0.002, r["residual_energy"]
+        assert r["status"] == status, (dE, r["status"], r["diagnostic"])
+        assert ("state ahead off the pole: its E differs" in r["diagnostic"]) == (status != "ok")
+
+
 def test_a_run_without_any_slab_is_too_few_samples_not_an_error():
     """A front always nearer the boundaries than gap + the least slab (a window too short for
     its ``shock.gap``): no sample has a slab on either side, and the point is

@@ -49,18 +49,21 @@ def ahead_off_pole(
     values: dict, residual_tol: float, pole: Pole | None
 ) -> tuple[float, str, float] | None:
     """The state ahead's worst departure from the pole while the jump is taken from the pole
-    (no ``two_wave``), as (fraction of the jump, field, departure), when it is off: its P, u
-    or ρ differs from the pole's by more than ``CLOSE_SIGMAS`` of its error and more than
-    ``residual_tol`` of the jump P − P0, u_p, ρ − ρ0 [-]. Such a departure moves the jump
-    residuals taken from the state ahead as measured by about that fraction (the momentum
-    residual by δu/u_p), so the point does not close from what is actually ahead of it;
-    else None."""
+    (no ``two_wave``), as (fraction of the jump, field, departure), when it is off: its P, u,
+    ρ or E differs from the pole's by more than ``CLOSE_SIGMAS`` of its error and more than
+    ``residual_tol`` of the jump P − P0, u_p, ρ − ρ0, E − E0 [-]. Such a departure moves the
+    jump residuals taken from the state ahead as measured by about that fraction (the
+    momentum residual by δu/u_p, the energy residual by δE/(E − E0): material ahead that
+    arrives warm, as a window's live inflow does at weak shocks), so the point does not
+    close from what is actually ahead of it; else None."""
     if pole is None or values.get("two_wave", 0.0):
         return None
     ahead = (("P", values.get("ahead_P", np.nan) - pole.P0, values.get("P", np.nan) - pole.P0),
              ("u", values.get("ahead_u", np.nan), values.get("u_p", np.nan)),
              ("rho", values.get("ahead_rho", np.nan) - pole.rho0,
-              values.get("rho", np.nan) - pole.rho0))  # fmt: skip
+              values.get("rho", np.nan) - pole.rho0),
+             ("E", values.get("ahead_E", np.nan) - pole.E0,
+              values.get("E", np.nan) - pole.E0))  # fmt: skip
     worst = max(
         ((abs(d / j), k, d) for k, d, j in ahead
          if np.isfinite(d) and np.isfinite(j) and j != 0
@@ -106,7 +109,7 @@ def named_causes(
       tail of a broad front; the state still changing);
     - no state ahead measured (``ahead_seen``): a point is not ``ok`` without it;
     - the state ahead off the pole while the jump is taken from the pole (no ``two_wave``):
-      its P, u or ρ differs from the pole's by more than ``CLOSE_SIGMAS`` errors and
+      its P, u, ρ or E differs from the pole's by more than ``CLOSE_SIGMAS`` errors and
       ``residual_tol`` of the jump (AMW on the default liquid at u_p = 3: the material
       between the inflow and the front moves at +0.064 ± 0.008 σ/τ, P +0.40 ± 0.02 above P0,
       1.4 % of the jump)."""
