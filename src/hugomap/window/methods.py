@@ -248,7 +248,7 @@ def steered_out_scatter(
     x, y = _steering_pairs(a_, du_, length)
     fitted = response is None
     if fitted:
-        r = steering_response(a_, du_, length)
+        r = _response_fit(x, y)
         response = r if np.isfinite(r) else 0.0  # no step taken: the slopes' own scatter
     d = y - response * x
     return float(np.sqrt(np.sum(d * d) / (2.0 * (d.size - int(fitted)))))
@@ -268,7 +268,11 @@ def steering_response(a, du, length: float) -> float:
     a_, du_ = np.asarray(a, dtype=float), np.asarray(du, dtype=float)
     if a_.size < 5 or du_.size < a_.size - 1:
         return float("nan")
-    x, y = _steering_pairs(a_, du_, length)
+    return _response_fit(*_steering_pairs(a_, du_, length))
+
+
+def _response_fit(x: np.ndarray, y: np.ndarray) -> float:
+    """Least-squares slope through the origin of y on x; NaN where every x is 0."""
     sxx = float(np.sum(x * x))
     return float(np.sum(x * y)) / sxx if sxx > 0 else float("nan")
 

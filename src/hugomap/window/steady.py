@@ -71,7 +71,7 @@ def steady_state(
     sums_all: list[np.ndarray] = []
     omega: list[float] = []
     while True:
-        for _ in range(min(n, n_max - len(t)) if t else n):
+        for _ in range(min(n, n_max - len(t))):  # n_max ≥ n: the first chunk is whole
             win.advance(every)
             omega.append(signal(win))
             sums = profile.sums(win)
