@@ -83,7 +83,9 @@ class PistonFrame:
     transverse area (per unit depth in 2D, 1 in 1D); lengths, times and velocities in the
     backend's units. ``gap``, ``avg_length``: the measured slabs' (``shock.gap``,
     ``shock.avg_length``) in these units where the scene gives them in others (LAMMPS units
-    metal: the scene in Å, the frame in m); None: the scene's."""
+    metal: the scene in Å, the frame in m); None: the scene's. ``piston_gap``: how far the
+    slab behind the front keeps from the piston (``shock.piston_gap``, clear of the layers
+    the piston's start shocked); None: ``gap``."""
 
     u_behind: float
     u_ahead: float
@@ -95,6 +97,7 @@ class PistonFrame:
     far_end: float | None = None
     gap: float | None = None
     avg_length: float | None = None
+    piston_gap: float | None = None
 
 
 @dataclass(frozen=True)

@@ -345,6 +345,31 @@ def test_window_leaves_room_for_the_slab_ahead() -> None:
     validate_config(cfg)
 
 
+def test_piston_gap_clears_the_start_where_the_sample_allows() -> None:
+    """The default liquid's loading ends with the front 0.3 x 410.4 = 123 sigma from the
+    piston: room for the 30-sigma piston gap, which is filled in. The tiny scene's loading
+    leaves less, so it keeps shock.gap (the old slab); a value set beyond the room is
+    refused, naming the key and the range."""
+    from hugomap.md.scene_config import PISTON_GAP, piston_gap_room
+
+    sc = load_config(ROOT / "config/config.yaml")["scenes"]["lj_liquid"]
+    assert sc["shock"]["piston_gap"] == PISTON_GAP == 30.0
+    assert piston_gap_room(sc) == pytest.approx(0.3 * 240 * 5.0 ** (1 / 3) - 8.0 - 3.0)
+    cfg = tiny()
+    out = validate_config(copy.deepcopy(cfg))["scenes"]["tiny"]
+    room = piston_gap_room(out)
+    assert room < PISTON_GAP and out["shock"]["piston_gap"] == out["shock"]["gap"]
+    cfg["scenes"]["tiny"]["shock"]["piston_gap"] = room + 1.0
+    with pytest.raises(ConfigError) as ei:
+        validate_config(copy.deepcopy(cfg))
+    assert (
+        f"scenes.tiny.shock.piston_gap = {room + 1.0}: leaves the piston no slab when its "
+        f"drive starts; allowed range [0, {room:.4g}] sigma"
+    ) in str(ei.value)
+    cfg["scenes"]["tiny"]["shock"]["piston_gap"] = room
+    assert validate_config(cfg)["scenes"]["tiny"]["shock"]["piston_gap"] == room
+
+
 def test_mw_position_gain_is_per_window_time_for_both_solvers() -> None:
     """One meaning: dimensionless, per window_time. The MD default 0.1 at the default
     window_time (2 tau) is the former 0.05 per tau."""

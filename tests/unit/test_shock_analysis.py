@@ -144,6 +144,27 @@ def test_a_point_is_ok_only_if_its_residuals_close_within_tolerance_and_errors()
             assert "3 of its error" in r["diagnostic"]
 
 
+def test_the_piston_slab_keeps_clear_of_the_layers_its_start_heated():
+    """The toy column over its whole length (avg_length 1000), with the 20 bins next to the
+    piston 4 % of the energy jump too warm (what the LJ piston's start leaves 5-40 sigma
+    from it): from 3 bins off the piston the slab's energy residual reads the warm layers
+    and the point is not ok; from 22 bins (``left_gap``, the stage's ``shock.piston_gap``)
+    the jump closes and the point is ok."""
+    from hugomap.analysis.shock import measure_point
+
+    h, pole = _toy_run(0.0, 0.0005)
+    jump = _behind(1.0, 1.0, 0.0, 0.0, 3.0, 1.0)[2]
+    warm = np.arange(100) < 20
+    behind = np.arange(1, 101)[None, :] <= h["front"][:, None]
+    h["sums"][..., 4] += 0.04 * jump * (warm[None, :] & behind)
+    kw = dict(gap=3.0, avg_length=1000.0, residual_tol=0.01)
+    near = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, **kw)
+    clear = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, left_gap=22.0, **kw)
+    assert near["residual_energy"] > 0.01 and near["status"] == "not_converged"
+    assert "energy" in near["diagnostic"], near["diagnostic"]
+    assert abs(clear["residual_energy"]) < 0.002 and clear["status"] == "ok", clear["diagnostic"]
+
+
 def test_a_point_is_not_ok_without_a_measured_state_ahead():
     """The exact jump of the toy run is ok; the same run with the far boundary 8 bins ahead
     of the front (2 gap = 6 leave 2 bins, below MIN_SLAB_BINS) has no state ahead, so what

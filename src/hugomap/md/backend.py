@@ -241,7 +241,7 @@ class MDBackend:
             u_behind=0.0, u_ahead=-u_p, x_origin=solver.wall_positions()[0],
             load_distance=sh["load_fraction"] * float(solver.state.L[0]),
             rear_margin=sh["rear_margin"], max_time=sh["max_time"],
-            sample_every=sh["sample_every"],
+            sample_every=sh["sample_every"], piston_gap=sh["piston_gap"],
         )  # fmt: skip
 
     def profile(self, solver, scene: dict, info: dict | None = None) -> MDProfile:

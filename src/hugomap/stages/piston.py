@@ -238,6 +238,7 @@ def piston_point(
             sh["gap"] if frame.gap is None else frame.gap,
             sh["avg_length"] if frame.avg_length is None else frame.avg_length,
             sh["residual_tol"],
+            left_gap=frame.piston_gap,
             track=steady_track(a, frame),
         )  # fmt: skip
         r.pop("u_p"), r.pop("u_p_err")  # u_p is exact: the dataset's coordinate
