@@ -19,9 +19,10 @@ from ..keys import MIN_SLAB_BINS, duplicate_point_tags, window_ahead_room
 #: 30-cell box; ``md.sample.size_bulk``).
 DATA_LX_TOL = 0.01
 
-#: The piston's slab keeps this far from the piston by default [σ]: the layers its start
-#: shocked carry +2 to +4.6 % of the energy jump 5-40 σ from it and the slab from 8 σ read
-#: +0.44 % on average, from 30 σ +0.01 % (eight piston runs of the default liquid, u_p = 1-2.5,
+#: The piston's slab keeps this far from the piston by default [σ]. The layers its start
+#: shocked ring: +2 to +5.5 % of the energy jump 5-55 σ from it, -0.2 to -3 % at 55-125 σ,
+#: near 0 beyond. From 30 σ the slab's energy residual is -0.03 ± 0.08 %, from 8 σ
+#: +0.41 ± 0.08 %, from 60 σ -0.69 ± 0.18 % (22 piston runs of the default liquid, u_p = 1-2.5;
 #: docs/window-methods.md "The piston's start").
 PISTON_GAP = 30.0
 
