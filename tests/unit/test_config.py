@@ -349,7 +349,8 @@ def test_piston_gap_clears_the_start_where_the_sample_allows() -> None:
     """The default liquid's loading ends with the front 0.3 x 410.4 = 123 sigma from the
     piston: room for the 30-sigma piston gap, which is filled in. The tiny scene's loading
     leaves less, so it keeps shock.gap (the old slab); a value set beyond the room is
-    refused, naming the key and the range."""
+    refused, naming the key and the range; a loading too short even for shock.gap keeps
+    shock.gap, as before."""
     from hugomap.md.scene_config import PISTON_GAP, piston_gap_room
 
     sc = load_config(ROOT / "config/config.yaml")["scenes"]["lj_liquid"]
@@ -367,7 +368,13 @@ def test_piston_gap_clears_the_start_where_the_sample_allows() -> None:
         f"drive starts; allowed range [0, {room:.4g}] sigma"
     ) in str(ei.value)
     cfg["scenes"]["tiny"]["shock"]["piston_gap"] = room
-    assert validate_config(cfg)["scenes"]["tiny"]["shock"]["piston_gap"] == room
+    assert validate_config(copy.deepcopy(cfg))["scenes"]["tiny"]["shock"]["piston_gap"] == room
+    # A loading too short even for shock.gap keeps the old slab rather than being refused.
+    del cfg["scenes"]["tiny"]["shock"]["piston_gap"]
+    cfg["schemes"] = ["piston"]
+    cfg["scenes"]["tiny"]["shock"]["load_fraction"] = 0.1
+    short = validate_config(cfg)["scenes"]["tiny"]
+    assert piston_gap_room(short) < short["shock"]["gap"] == short["shock"]["piston_gap"]
 
 
 def test_mw_position_gain_is_per_window_time_for_both_solvers() -> None:
