@@ -146,7 +146,7 @@ def test_a_point_is_ok_only_if_its_residuals_close_within_tolerance_and_errors()
 
 def test_the_piston_slab_keeps_clear_of_the_layers_its_start_heated():
     """The toy column over its whole length (avg_length 1000), with the 20 bins next to the
-    piston 4 % of the energy jump too warm (what the LJ piston's start leaves 5-40 sigma
+    piston 4 % of the energy jump too warm (what the LJ piston's start leaves 5-55 sigma
     from it): from 3 bins off the piston the slab's energy residual reads the warm layers
     and the point is not ok; from 22 bins (``left_gap``, the stage's ``shock.piston_gap``)
     the jump closes and the point is ok."""
