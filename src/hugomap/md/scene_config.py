@@ -35,11 +35,11 @@ def lattice_constant(rho: float) -> float:
     return (4.0 / rho) ** (1.0 / 3.0)
 
 
-def _sample_length(scene: dict) -> float:
-    """L_x = nx·a of the sample [σ] (a prepared liquid is shorter by the walls' excess layer,
-    0.2 % of the default liquid: ``md.sample.size_bulk``)."""
-    smp = scene["sample"]
-    return smp["cells"][0] * lattice_constant(smp["rho0"])
+def box_lengths(smp: dict) -> list[float]:
+    """The sample's box cells·a [σ] along x, y, z (a prepared liquid is shorter in x by the
+    walls' excess layer, 0.2 % of the default liquid: ``md.sample.size_bulk``)."""
+    a = lattice_constant(smp["rho0"])
+    return [c * a for c in smp["cells"]]
 
 
 def piston_gap_room(scene: dict) -> float:
@@ -47,7 +47,7 @@ def piston_gap_room(scene: dict) -> float:
     starts: the front's travel at the end of loading (load_fraction·L_x) less ``shock.gap``
     and ``MIN_SLAB_BINS`` bins."""
     sh = scene["shock"]
-    travel = sh["load_fraction"] * _sample_length(scene)
+    travel = sh["load_fraction"] * box_lengths(scene["sample"])[0]
     return travel - sh["gap"] - MIN_SLAB_BINS * sh["bin_width"]
 
 
@@ -66,8 +66,7 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
     message names every key it depends on."""
     problems = []
     smp, pot, sh = scene["sample"], scene["potential"], scene["shock"]
-    a = lattice_constant(smp["rho0"])
-    L = [c * a for c in smp["cells"]]
+    L = box_lengths(smp)
     rlist = pot["rc"] + pot["skin"]
     half_t = 0.5 * min(L[1], L[2])
     box = f"sample.cells = {smp['cells']} at sample.rho0 = {smp['rho0']}"
@@ -95,11 +94,11 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
     # Up to shock.gap is always allowed: the slab as it was before the piston had a gap of
     # its own (on a short sample the drive's first samples may have none; the measurement
     # needs half of them with one).
-    room = piston_gap_room(scene)
-    if sh["piston_gap"] > max(room, sh["gap"]):
+    allowed = max(piston_gap_room(scene), sh["gap"])
+    if sh["piston_gap"] > allowed:
         problems.append(
             f"{base}.shock.piston_gap = {sh['piston_gap']}: leaves the piston no slab when "
-            f"its drive starts; allowed range [0, {max(room, sh['gap']):.4g}] sigma (the "
+            f"its drive starts; allowed range [0, {allowed:.4g}] sigma (the "
             f"front's travel at the end of loading, shock.load_fraction = "
             f"{sh['load_fraction']} of L_x = {L[0]:.4g}, less shock.gap = {sh['gap']} and "
             f"{MIN_SLAB_BINS} bins of shock.bin_width = {sh['bin_width']} for {box}; or "
