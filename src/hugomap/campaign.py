@@ -216,6 +216,8 @@ POINT_COLUMNS: dict[str, tuple[str, str]] = {
     "err_D_err": ("1", "standard error of err_D (the point's and the reference's)"),
     "err_P": ("1", "relative error of P from the reference Hugoniot at u_eval: P/P_ref - 1"),
     "err_P_err": ("1", "standard error of err_P (the point's and the reference's)"),
+    "err_D_own_err": ("1", "standard error of err_D from the point alone (no reference part)"),
+    "err_P_own_err": ("1", "standard error of err_P from the point alone (no reference part)"),
     **{
         f"residual_{k}{e}": ("1", f"{w} of the point's {k} closure (0 for a steady shock)")
         for k in CLOSURES
@@ -313,9 +315,13 @@ def campaign_dataset(cfg: Mapping, aggregates: Mapping[str, str | Path]) -> xr.D
                 at = reference_at(u_eval, ru, ref) if ref else {}
                 for q in ("D", "P"):
                     x, xe = (val(q), val(q + "_err")) if usable else (math.nan, math.nan)
+                    c = corr if q == "P" else 0.0
                     row[f"err_{q}"], row[f"err_{q}_err"] = reference_deviation(
-                        x, xe, at, q, u_err, corr if q == "P" else 0.0
+                        x, xe, at, q, u_err, c
                     )
+                    # the reference's error left out: points on one reference compare so
+                    own = reference_deviation(x, xe, {**at, f"{q}_err": 0.0}, q, u_err, c)
+                    row[f"err_{q}_own_err"] = own[1]
                 row["D_over_c0"] = (val("D") if usable else math.nan) / c0
                 for k in CLOSURES:
                     for e in ("", "_err"):
@@ -437,8 +443,10 @@ def replica_statistics(ds: xr.Dataset, cases: Sequence[str]) -> dict:
     scheme and u_p, for D and P (their relative errors against the reference, with the
     combined errors) and for each closure's residual ``residual_<k>`` (whose reference is 0,
     with the point's own error: do the residuals' errors hold too?): over the usable points
-    (ok or not_converged) and over the ok ones."""
-    from .analysis.replicas import replica_summary
+    (ok or not_converged) and over the ok ones. ``vs_piston``: each window point's D and P
+    against the piston point of the same seed and u_p (``analysis.replicas.against_base``,
+    the points' own errors), grouped by scheme and u_p: do the methods agree?"""
+    from .analysis.replicas import against_base, replica_summary
 
     # quantity -> its column (and <column>_err): D, P against the reference, residuals against 0
     cols = {"D": "err_D", "P": "err_P"} | {f"residual_{k}": f"residual_{k}" for k in CLOSURES}
@@ -452,6 +460,16 @@ def replica_statistics(ds: xr.Dataset, cases: Sequence[str]) -> dict:
                       zip(ds["scheme"].values[m], ds["u_p_over_c0"].values[m], strict=True)]  # fmt: skip
             vals = {q: (ds[c].values[m], ds[c + "_err"].values[m]) for q, c in cols.items()}
             out.setdefault(case, {})[which] = replica_summary(groups, vals)
+            pairs = [(str(a), g[1]) for a, g in zip(ds["scene"].values[m], groups, strict=True)]
+            schemes = [g[0] for g in groups]
+            diffs = {}
+            for q in ("D", "P"):
+                e, s = ds[f"err_{q}"].values[m], ds[f"err_{q}_own_err"].values[m]
+                idx, d, sd = against_base(pairs, schemes, e, s)
+                diffs[q] = (d, sd)
+            if idx:
+                vs = replica_summary([groups[i] for i in idx], diffs)
+                out[case].setdefault("vs_piston", {})[which] = vs
         out[case]["n_points"] = int(sel.sum())
         out[case]["n_ok"] = int((sel & (ds["status"].values == "ok")).sum())
     return out

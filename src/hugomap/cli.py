@@ -246,12 +246,16 @@ def main(argv: list[str] | None = None) -> int:
                   "sample.seed)", file=sys.stderr)  # fmt: skip
             return 2
         for case, r in reps.items():
-            for which in ("usable", "ok"):
-                s = r[which]
-                print(json.dumps({"case": case, "points": which, **{k: v for k, v in s.items()
-                                  if k != "groups"}}))  # fmt: skip
-                for g in s["groups"]:
-                    print(json.dumps({"case": case, "points": which, **g}))
+            # against the reference, then each window scheme against the piston
+            for against, block in (("reference", r), ("piston", r.get("vs_piston", {}))):
+                for which in ("usable", "ok"):
+                    if which not in block:
+                        continue
+                    s = block[which]
+                    head = {"case": case, "against": against, "points": which}
+                    print(json.dumps({**head, **{k: v for k, v in s.items() if k != "groups"}}))
+                    for g in s["groups"]:
+                        print(json.dumps({**head, **g}))
     elif args.cmd == "history":
         from .figures import window_history_figure
 

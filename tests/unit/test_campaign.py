@@ -9,7 +9,9 @@ fronts against values worked out by hand; the failure labels against ``failures.
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import io
 import json
 import math
 from pathlib import Path
@@ -136,15 +138,21 @@ def test_md_c0_is_the_reference_line_intercept():
     assert math.isnan(cp.case_c0(xr.Dataset(), {"solver": "md"}))
 
 
-def _aggregates(tmp_path: Path, cfg: dict, outcome, extra=None) -> list[Path]:
+def _aggregates(
+    tmp_path: Path, cfg: dict, outcome, extra=None, ups: np.ndarray | None = None,
+    ref_err: float = 0.0,
+) -> list[Path]:  # fmt: skip
     """Aggregates of every campaign scene from synthetic point files: D = D_ref (1 + e) with
-    e and the status from ``outcome(scene, scheme, u)``; the reference D = c0 + s u_p;
+    e and the status from ``outcome(scene, scheme, u)``; the reference D = c0 + s u_p at
+    ``ups`` (30 points, 50-1500; MD's u_p need their own range), D's error ``ref_err`` D;
     ``extra(scene, scheme, u)``: more values of a usable point (e.g. its residuals)."""
-    ups = np.linspace(50.0, 1500.0, 30)
+    ups = np.linspace(50.0, 1500.0, 30) if ups is None else ups
     ref = xr.Dataset({
         "u_p": ("point", ups), "D": ("point", C0 + S * ups),
         "P": ("point", 8930.0 * (C0 + S * ups) * ups), "V": ("point", np.ones(30)),
     })  # fmt: skip
+    if ref_err:
+        ref["D_err"] = ref_err * ref["D"]
     ref_path = tmp_path / "reference.nc"
     write_netcdf(ref, ref_path)
     out = []
@@ -249,6 +257,43 @@ def test_replica_study_checks_the_closures_errors_too(tmp_path):
     assert r["residual_flow_chi2_red"] == pytest.approx(16.0 / 3.0, rel=1e-12)
     assert r["residual_flow_pull_rms"] == pytest.approx(2.0, rel=1e-12)
     assert r["residual_mass_chi2_red"] == 0.0 and r["residual_mass_pull_rms"] == 0.0
+
+
+def test_replica_study_compares_each_window_point_with_its_seeds_piston(tmp_path):
+    """Four seeds, piston and AMW: AMW's D lies 0.3 % above the piston's on every seed
+    (e = 0 for the piston, D_err = 0.001 D for both), so its RMS pull against the piston is
+    0.003/√2·0.001 ≈ 2.1 and the reference's error (0.2 %) plays no part; the piston is not
+    compared with itself. The CLI prints the block."""
+    cfg = validate_config({"campaign": {"name": "rep", "cases": {"liq": {
+        "scene": {"solver": "md", "phase": "liquid", "schemes": ["piston", "amw"],
+                  "sample": {"rho0": 0.8, "T0": 2.0, "cells": [36, 4, 4], "seed": 1},
+                  "shock": {"u_p": [1.0, 2.0]}},
+        "resolutions": {f"s{i}": {"sample.seed": i} for i in range(1, 5)}}}}})  # fmt: skip
+    e_amw = 0.003
+
+    def outcome(name: str, scheme: str, u: float) -> tuple[float, str, float]:
+        return (e_amw if scheme == "amw" else 0.0), "ok", 1.0
+
+    aggs = _aggregates(tmp_path, cfg, outcome, ups=np.linspace(0.5, 3.0, 30), ref_err=0.002)
+    ds = cp.campaign_dataset(cfg, {Path(a).stem: a for a in aggs})
+    own = ds["err_D_own_err"].values
+    assert own[ds["scheme"].values == "piston"] == pytest.approx(0.001, rel=1e-9)
+    assert (own < ds["err_D_err"].values).all()  # the reference's part left out
+    vs = json.loads(ds.attrs["replicas"])["liq"]["vs_piston"]["ok"]
+    pull = e_amw / math.hypot(0.001 * (1 + e_amw), 0.001)
+    assert vs["D_n"] == 8 and vs["D_pull_rms"] == pytest.approx(pull, rel=1e-9)
+    assert {tuple(g["label"])[0] for g in vs["groups"]} == {"amw"}
+    out = tmp_path / "rep.nc"
+    write_netcdf(ds, out)
+    lines = _run_cli(["replicas", str(out)])
+    assert any(r.get("against") == "piston" and r.get("D_pull_rms") for r in lines)
+
+
+def _run_cli(args: list[str]) -> list[dict]:
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(args) == 0
+    return [json.loads(x) for x in buf.getvalue().splitlines()]
 
 
 def test_cli_writes_dataset_chart_and_map(tmp_path):

@@ -9,8 +9,9 @@ but not χ²/ν."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from hugomap.analysis.replicas import replica_cases, replica_summary
+from hugomap.analysis.replicas import against_base, replica_cases, replica_summary
 
 
 def _draw(scale_err: float, bias: float, seed: int = 5):
@@ -48,6 +49,18 @@ def test_a_replica_case_sets_only_the_seed():
                                             "hi": {"sample.seed": 3}}},
                       "c": {"resolutions": {"s1": {"sample.seed": 1}}}}}  # fmt: skip
     assert replica_cases(camp) == ["a"]
+
+
+def test_against_base_pairs_each_point_with_its_one_base():
+    """d = e − e_base with the errors in quadrature; a key without a base, or with two,
+    pairs nothing, and the base is not paired with itself."""
+    pairs = [("s1", 1), ("s1", 1), ("s2", 1), ("s3", 1), ("s3", 1), ("s3", 1)]
+    schemes = ["piston", "amw", "amw", "piston", "piston", "mw"]
+    e = np.array([0.01, 0.04, 0.02, 0.0, 0.0, 0.0])
+    s = np.array([0.003, 0.004, 0.001, 0.001, 0.001, 0.001])
+    idx, d, sd = against_base(pairs, schemes, e, s)
+    assert idx == [1]
+    assert d == pytest.approx([0.03]) and sd == pytest.approx([0.005])
 
 
 def _split(d):

@@ -11,6 +11,11 @@ reference's; each replica has its own sample, pole and reference):
 Errors that hold give χ²_ν near 1 (for ν = 7, 90 % of values fall in 0.31–2.0) and an RMS
 pull near 1; χ²_ν ≫ 1 means errors too small, ≪ 1 too large; an RMS pull well above √χ²_ν
 means a bias that the replicas share (the reference, or the method).
+
+Do the methods agree? A window point against the piston point of the same sample and
+nominal u_p (``against_base``): d_i = e_i − e_piston, with the two points' own errors
+s_i = √(σ_i² + σ_piston²) (relative; the reference's error, common to both, cancels). Its
+pull d_i/s_i has an RMS near 1 when the two schemes agree within their errors.
 """
 
 from __future__ import annotations
@@ -31,6 +36,31 @@ def replica_cases(campaign: Mapping) -> list[str]:
         if len(res) >= 2 and all(set(r) == {SEED_KEY} for r in res.values()):
             out.append(case)
     return out
+
+
+def against_base(
+    pairs: Sequence[tuple], schemes: Sequence[str], e: np.ndarray, s: np.ndarray,
+    base: str = "piston",
+) -> tuple[list[int], np.ndarray, np.ndarray]:  # fmt: skip
+    """Each point's deviation from the ``base`` scheme's point of the same pair key (module
+    docstring): (indices of the points that have one, d = e_i − e_base, √(s_i² + s_base²)).
+    ``pairs``: one key a point (e.g. (scene, u_p)); ``e``, ``s``: relative deviations from
+    a common reference and the points' own errors. A key with no base point, or with more
+    than one, pairs nothing; a point or base without a finite value gives NaN."""
+    e, s = np.asarray(e, float), np.asarray(s, float)
+    bases: dict[tuple, list[int]] = {}
+    for i, (k, sch) in enumerate(zip(pairs, schemes, strict=True)):
+        if sch == base:
+            bases.setdefault(k, []).append(i)
+    idx, d, sd = [], [], []
+    for i, (k, sch) in enumerate(zip(pairs, schemes, strict=True)):
+        j = bases.get(k, [])
+        if sch == base or len(j) != 1:
+            continue
+        idx.append(i)
+        d.append(e[i] - e[j[0]])
+        sd.append(float(np.hypot(s[i], s[j[0]])))
+    return idx, np.array(d, dtype=float), np.array(sd, dtype=float)
 
 
 def group_chi2(e: np.ndarray, s: np.ndarray) -> tuple[float, int, float]:
