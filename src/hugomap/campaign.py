@@ -460,14 +460,14 @@ def replica_statistics(ds: xr.Dataset, cases: Sequence[str]) -> dict:
                       zip(ds["scheme"].values[m], ds["u_p_over_c0"].values[m], strict=True)]  # fmt: skip
             vals = {q: (ds[c].values[m], ds[c + "_err"].values[m]) for q, c in cols.items()}
             out.setdefault(case, {})[which] = replica_summary(groups, vals)
+            # a window point and its seed's piston point: one scene (seed), one u_p
             pairs = [(str(a), g[1]) for a, g in zip(ds["scene"].values[m], groups, strict=True)]
             schemes = [g[0] for g in groups]
-            diffs = {}
-            for q in ("D", "P"):
-                e, s = ds[f"err_{q}"].values[m], ds[f"err_{q}_own_err"].values[m]
-                idx, d, sd = against_base(pairs, schemes, e, s)
-                diffs[q] = (d, sd)
+            paired = {q: against_base(pairs, schemes, ds[f"err_{q}"].values[m],
+                                      ds[f"err_{q}_own_err"].values[m]) for q in ("D", "P")}  # fmt: skip
+            idx = paired["D"][0]  # the pairing does not depend on the values
             if idx:
+                diffs = {q: (d, sd) for q, (_, d, sd) in paired.items()}
                 vs = replica_summary([groups[i] for i in idx], diffs)
                 out[case].setdefault("vs_piston", {})[which] = vs
         out[case]["n_points"] = int(sel.sum())
