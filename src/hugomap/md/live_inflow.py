@@ -25,18 +25,6 @@ the inflow, the less of that spread reaches the seam: a uniform flow at 9 σ/τ 
 within 0.04 % and 0.8 %, at 6 σ/τ (below c0 ≈ 7 σ/τ, which no shock window's inflow is)
 the seam heats it by 12 % (``tests/physics/test_window_flow.py``).
 
-The seam's work. The copy follows the reservoir and never recoils: once the window's atoms
-by the seam have drifted off their reservoir images, the copy's thermal motion is a driven,
-unyielding boundary that does work on what it strikes, as a moving wall does, while a frozen
-copy, at rest in the flow's frame, does none. That work, per step dt Σ F_ba · (v_b − u_in
-e_x) over the copy's atoms b and the window's atoms a within rc of them
-(``forces.pair_power``), is measured: a uniform flow at 6 σ/τ (5 × 5 cells, 30 τ) takes
-0.50–0.53 ε per inflowing atom from it and heats from T0 = 2 to 2.18–2.25; at 8.1 σ/τ, u_p
-= 1's D, 0.01 ε per atom. With ``seam_work = "returned"`` (``return_seam_work``) it is taken
-back each step from the window's atoms there, momentum kept: at 6 σ/τ T is then 1.98–2.04;
-at 8.1 σ/τ T falls by about 0.6 %, from 2.02–2.06 to 2.01–2.04, so most of that seam's heat
-has another cause. The default keeps it (``"kept"``).
-
 ``unwrap`` holds each atom's continuous position (its periodic jumps undone) and ``image``
 its next image's index, both by the atom's id, so an atom that crosses the reservoir's
 boundary keeps its place in the chain of images and none is fed twice or skipped.
@@ -49,11 +37,8 @@ import json
 import numpy as np
 import xarray as xr
 
-from ..failures import SolverUnstable
-from .forces import pair_power
 from .simulation import MDSimulation
 
-SEAM_WORK = ("returned", "kept")  # what becomes of the work the copy's thermal motion does
 LIVE_PREFIX = "live_"  # the reservoir's checkpoint variables inside a window checkpoint
 
 
@@ -62,18 +47,9 @@ class LiveReservoir:
     atom's unwrapped position ``unwrap`` (N, 3) [σ] indexed by its id (module docstring)."""
 
     def __init__(
-        self,
-        sim: MDSimulation,
-        unwrap: np.ndarray | None = None,
-        image: np.ndarray | None = None,
-        seam_work: str = "kept",
-        returned: float = 0.0,
+        self, sim: MDSimulation, unwrap: np.ndarray | None = None, image: np.ndarray | None = None
     ) -> None:
-        if seam_work not in SEAM_WORK:
-            raise ValueError(f"seam_work = {seam_work!r}: one of {SEAM_WORK}")
         self.sim = sim
-        self.seam_work = seam_work
-        self.returned = float(returned)  # the work returned so far [ε] (``return_seam_work``)
         s = sim.state
         n = s.n
         if unwrap is None:
@@ -120,40 +96,6 @@ class LiveReservoir:
         v[s.ids] = s.v
         return v
 
-    def return_seam_work(self, s, copy: np.ndarray, x_hi: float, lag: float, u_in: float,
-                         dt: float) -> float:  # fmt: skip
-        """Take back from the window's atoms at the seam the work the copy's thermal motion
-        does on them in the coming step of ``dt`` [τ] (module docstring), and return it [ε].
-
-        W = dt Σ_a Σ_b F_ba · (v_b − u_in e_x) (``forces.pair_power``) over the copy atoms b
-        (``copy``, a mask of the window state ``s``) and the mobile atoms a within rc of any
-        of them: every copy atom lies beyond x_hi − ``lag`` (the distance an image travels
-        between releases), so the a atoms are those beyond x_hi − lag − rc. Their velocities
-        about their own mean are scaled by √(1 − W/K), K their kinetic energy about that
-        mean: momentum is kept and the energy loses exactly W. The copy's motion at u_in, the
-        push that feeds the window, does its work as a frozen copy's does."""
-        rc = self.sim.lj.rc
-        x = s.x
-        zone = (s.ids >= 0) & (x[:, 0] > x_hi - lag - rc)
-        if not zone.any():
-            return 0.0
-        near = copy & (x[:, 0] < float(x[zone, 0].max()) + rc)
-        w = s.v[near] - np.array([u_in, 0.0, 0.0])
-        work = dt * pair_power(x[zone], x[near], w, s.L, s.periodic, rc * rc)
-        v = s.v[zone]
-        mean = v.mean(axis=0)
-        th = v - mean
-        kin = 0.5 * float(np.sum(th * th))
-        if not work < kin:
-            raise SolverUnstable(
-                "seam_work",
-                f"the copy's work at the seam, {work:.4g} eps in one step, exceeds the kinetic "
-                f"energy of the {int(zone.sum())} atoms there ({kin:.4g} eps)",
-            )
-        s.v[zone] = mean + np.sqrt(1.0 - work / kin) * th
-        self.returned += work
-        return work
-
     def to_dataset(self) -> xr.Dataset:
         """The reservoir's checkpoint (``MDSimulation.to_dataset``, bit-exact) and its
         unwrapped positions, every name prefixed ``live_``, its seal in ``live_attrs``."""
@@ -164,9 +106,7 @@ class LiveReservoir:
                                        "long_name": "live reservoir unwrapped positions, by id"})  # fmt: skip
         out[LIVE_PREFIX + "image"] = ((LIVE_PREFIX + "atom",), self.image.copy(),
                                       {"units": "1", "long_name": "next image index, by id"})  # fmt: skip
-        out.attrs = {LIVE_PREFIX + "attrs": json.dumps(ds.attrs),
-                     LIVE_PREFIX + "seam": json.dumps({"seam_work": self.seam_work,
-                                                      "returned": self.returned})}  # fmt: skip
+        out.attrs = {LIVE_PREFIX + "attrs": json.dumps(ds.attrs)}
         return out
 
     @classmethod
@@ -181,7 +121,4 @@ class LiveReservoir:
         sub = sub.rename({k: k[len(LIVE_PREFIX) :] for k in {*sub.variables, *sub.dims}})
         sub.attrs = json.loads(ds.attrs[key])
         sim = MDSimulation.from_dataset(sub, source)
-        # checkpoints written before the seam's work was returned kept it
-        seam = json.loads(ds.attrs.get(LIVE_PREFIX + "seam", '{"seam_work": "kept"}'))
-        return cls(sim, ds[own[0]].values.copy(), ds[own[1]].values, seam["seam_work"],
-                   seam.get("returned", 0.0))  # fmt: skip
+        return cls(sim, ds[own[0]].values.copy(), ds[own[1]].values)

@@ -251,7 +251,6 @@ class MDWindow:
         kit=None,
         segment: float = 0.0,
         inflow: str = "frozen",
-        seam_work: str = "kept",
     ) -> MDWindow:
         """Cut a window out of a piston run (piston frame: piston at rest at the left wall,
         upstream material at −u_p) with the front at ``front_fraction`` of ``length`` from
@@ -265,9 +264,7 @@ class MDWindow:
         ``kit`` (default ``MDKit``) builds the domain simulation; ``wall_layer`` (default 4
         of the kit's ``scale``) is kept clear of the piston run's walls. ``segment`` > 0
         lays the snapshot frozen behind ``x_hi`` a segment at a time, the longest whole
-        fraction of L_r not above it (and at least one; module docstring). ``inflow``:
-        "frozen" or "live"; a live one's ``seam_work`` (``md.live_inflow``): "returned" (the
-        work its copy's thermal motion does at the seam is taken back) or "kept"."""
+        fraction of L_r not above it (and at least one; module docstring)."""
         kit = kit if kit is not None else _kit_of(sim)
         unit = kit.units[0]
         wall_layer = 4.0 * kit.scale if wall_layer is None else wall_layer
@@ -342,8 +339,7 @@ class MDWindow:
                     "bad_config", "a live inflow reservoir runs on the numba MD backend only"
                 )
             # the copy laid above is the reservoir at t = 0: unwrap = rx, X = rx + x_hi e_x
-            live = LiveReservoir(kit.periodic(rx.copy(), rv.copy(), r.L.copy(), sim.dt),
-                                 seam_work=seam_work)  # fmt: skip
+            live = LiveReservoir(kit.periodic(rx.copy(), rv.copy(), r.L.copy(), sim.dt))
         elif inflow != "frozen":
             raise ValueError(f"inflow = {inflow!r}: 'frozen' or 'live'")
         return cls(dom, rx, rv, geom, u_in, u_out, x_face_in=x_hi, x_face=x_lo,
@@ -395,9 +391,6 @@ class MDWindow:
         d = X - s.x[copy]
         d[:, 1:] -= s.L[1:] * np.rint(d[:, 1:] / s.L[1:])
         s.v[copy] = d / dt
-        if self.live.seam_work == "returned":
-            lag = -self.u_in * self.geom.sync_steps * dt  # how far past x_hi an image waits
-            self.live.return_seam_work(s, copy, self.geom.x_hi, lag, self.u_in, dt)
 
     def _update_boundaries(self) -> None:
         """Release the inflow copy that reached ``x_hi`` and lay the next one behind it (live:
