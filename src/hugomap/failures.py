@@ -31,6 +31,10 @@ FAILURES: dict[str, tuple[str, str]] = {
     "particle_lost": ("unstable solver", "an SPH particle escaped through a wall or the window"),
     "eos_range": ("unstable solver", "an SPH particle left the EOS's valid compression range"),
     "dt_collapse": ("unstable solver", "the SPH time step collapsed"),
+    "seam_work": (
+        "unstable solver",
+        "the live inflow's copy did more work at the seam in one step than the atoms there hold",
+    ),
     "bad_config": ("bad input", "the stored config cannot run this stage"),
     "sample_too_short": ("piston", "the front reached the far end before the drive ended"),
     "max_time": ("piston", "the front did not reach its target within the time limit"),

@@ -126,3 +126,57 @@ def test_a_live_copy_is_the_whole_snapshot_and_a_bad_kind_is_refused(window) -> 
     assert MDWindow.from_piston(sim, res, **kw).geom.n_segments == 2
     with pytest.raises(ValueError, match="frozen' or 'live"):
         MDWindow.from_piston(sim, res, inflow="thawed", **kw)
+
+
+def test_the_seams_excess_work_is_taken_back_with_momentum_kept(window) -> None:
+    """``LiveReservoir.return_seam_work``: each released atom by the seam has a twin, its
+    reservoir atom carried on from the image it left, which sits where the atom was released
+    (round-off: 1e-9 σ); the window's atoms there lose exactly the copy's excess work W = dt
+    (``pair_power`` on them − on their twins) (their kinetic energy about their mean falls by
+    W), their momentum is kept and no other atom moves; the twins and the work returned so far
+    travel in the checkpoint, which resumes bit for bit. Round-off bounds: 1e-12 of the
+    kinetic energy and of the momentum's scale."""
+    from hugomap.md.forces import pair_power
+
+    win = MDWindow.from_dataset(window[0].to_dataset())  # a copy: the fixture stays as it is
+    assert win.live.seam_work == "kept" and win.live.twins.shape == (0, 3)  # the default
+    win.live.seam_work = "returned"
+    win.advance(25)  # one boundary update: the first twins
+    s, g, dt = win.sim.state, win.geom, win.sim.dt
+    tw = win.live.twins
+    assert tw.shape[0] > 10
+    new = tw[:, 0] >= tw[:, 0].max() - 5  # released at the last update, where they were put
+    at = np.array([np.flatnonzero(s.ids == i)[0] for i in tw[new, 0]])
+    d = s.x[at] - win.live.twin_positions(tw[new], win.x_face_in)
+    d[:, 1:] -= s.L[1:] * np.rint(d[:, 1:] / s.L[1:])
+    assert np.abs(d).max() < 1e-9, np.abs(d).max()
+    win.advance(50)  # the twins drift off
+    copy = (s.ids < 0) & (s.ids >= -win.n_res)
+    lag = -win.u_in * g.sync_steps * dt
+    rc = LJ.rc
+    tw = win.live.twins
+    zone = (s.ids >= 0) & (s.x[:, 0] > g.x_hi - lag - rc) & np.isin(s.ids, tw[:, 0])
+    a = np.flatnonzero(zone)
+    rows = np.array([tw[tw[:, 0] == i][0] for i in s.ids[a]])
+    near = copy & (s.x[:, 0] < s.x[a, 0].max() + rc)
+    vb = win.live.velocities()[-1 - s.ids[near]] + [win.u_in, 0.0, 0.0]
+    xt = win.live.twin_positions(rows, win.x_face_in)
+    args = (s.x[near], vb, s.L, s.periodic, rc * rc)
+    expect = dt * (pair_power(s.x[a], *args) - pair_power(xt, *args))
+    v0 = s.v.copy()
+    kin0 = 0.5 * np.sum((v0[zone] - v0[zone].mean(axis=0)) ** 2)
+    before = win.live.returned
+    work = win.live.return_seam_work(s, copy, g.x_hi, lag, win.u_in, win.x_face_in, dt)
+    assert abs(work - expect) < 1e-12 * kin0 and abs(work) > 0
+    kin1 = 0.5 * np.sum((s.v[zone] - s.v[zone].mean(axis=0)) ** 2)
+    assert abs(kin0 - kin1 - work) < 1e-12 * kin0
+    np.testing.assert_allclose(s.v[zone].sum(axis=0), v0[zone].sum(axis=0), rtol=0,
+                               atol=1e-12 * np.abs(v0[zone]).sum())  # fmt: skip
+    np.testing.assert_array_equal(s.v[~zone], v0[~zone])
+    assert win.live.returned == before + work
+    back = MDWindow.from_dataset(win.to_dataset())
+    assert (back.live.seam_work, back.live.returned) == ("returned", win.live.returned)
+    np.testing.assert_array_equal(back.live.twins, win.live.twins)
+    win.advance(100)
+    back.advance(100)
+    assert _digest(back) == _digest(win) and back.live.returned == win.live.returned

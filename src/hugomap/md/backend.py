@@ -294,7 +294,7 @@ class MDBackend:
             solver, res, front, u_p, D_guess, w["length"], w["front_fraction"],
             w["ghost_width"], w["cut_every"], w["sync_steps"],
             crystal=not fluid, lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0),
-            segment=w["reservoir_segment"], inflow=w["inflow"],
+            segment=w["reservoir_segment"], inflow=w["inflow"], seam_work=w["seam_work"],
         )  # fmt: skip
         wpole = pole if fluid else Pole.from_dict(inflow)
         o = w["outflow"]

@@ -188,3 +188,41 @@ def energy_virial_full(
         vir[i, 3] = 0.5 * wxy
         vir[i, 4] = 0.5 * wxz
         vir[i, 5] = 0.5 * wyz
+
+
+@njit
+def pair_power(
+    xa: np.ndarray,
+    xb: np.ndarray,
+    vb: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    rc2: float,
+) -> float:
+    """The power [ε/τ] that atoms b, moving at ``vb``, deliver to atoms a through their pairs:
+
+        dE_a/dt = Σ_a Σ_b F_ba · v_b,    F_ba = (F(r)/r) (r_a − r_b)  (``lj_pair``),
+
+    E_a the kinetic and potential energy of the a atoms with the a–b pair energies counted
+    in it (from dU_ab/dt = −Σ_a F_ba·v_a − Σ_b F_ab·v_b and the a atoms' own equations of
+    motion). Atoms b at rest do no work on the a atoms, however they are placed. All pairs
+    are visited (the callers pass the few hundred atoms on either side of a plane), the
+    minimum image taken in the periodic dimensions.
+    """
+    Lp = np.zeros(3)
+    for d in range(3):
+        if periodic[d]:
+            Lp[d] = L[d]
+    iL = 1.0 / L
+    p = 0.0
+    for i in range(xa.shape[0]):
+        for j in range(xb.shape[0]):
+            dx = xa[i, 0] - xb[j, 0]
+            dy = xa[i, 1] - xb[j, 1]
+            dz = xa[i, 2] - xb[j, 2]
+            dx -= Lp[0] * np.rint(dx * iL[0])
+            dy -= Lp[1] * np.rint(dy * iL[1])
+            dz -= Lp[2] * np.rint(dz * iL[2])
+            _, fr = lj_pair(dx * dx + dy * dy + dz * dz, rc2, 0.0)
+            p += fr * (dx * vb[j, 0] + dy * vb[j, 1] + dz * vb[j, 2])
+    return p

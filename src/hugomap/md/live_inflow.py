@@ -25,6 +25,21 @@ the inflow, the less of that spread reaches the seam: a uniform flow at 9 σ/τ 
 within 0.04 % and 0.8 %, at 6 σ/τ (below c0 ≈ 7 σ/τ, which no shock window's inflow is)
 the seam heats it by 12 % (``tests/physics/test_window_flow.py``).
 
+The seam's work. The copy follows the reservoir and never recoils: once the window's atoms
+by the seam have drifted off their reservoir images, the copy is a driven, unyielding
+boundary that does on them work it would not do on its own fluid. The power it delivers to
+atoms a is P = Σ_a Σ_b F_ba · v_b over the copy's atoms b (``forces.pair_power``); the
+same sum over the released atoms' reservoir twins (atom r released from image k sits, in
+the reservoir, at ``unwrap_r + (k L_r + offset) e_x``) is what the equilibrium fluid would
+receive across the seam. Their difference is the seam's excess: on a uniform flow at
+8.1 σ/τ (u_p = 1's D; 5 × 5 cells, 40 τ, two seeds) +0.030 ± 0.024 and +0.032 ± 0.019 ε
+per inflowing atom, +0.021 ± 0.004 of it from the copy's thermal motion, with the material
+3–21 σ downstream 0.02–0.08 ε above the pole's E0 (T +0.014 to +0.030). With
+``seam_work = "returned"`` (``return_seam_work``) the excess is taken back each step from
+the released atoms within reach of the copy (their velocities about their mean scaled,
+momentum kept). The default keeps it (``"kept"``); the twins are recorded only when it is
+returned (``record_release``).
+
 ``unwrap`` holds each atom's continuous position (its periodic jumps undone) and ``image``
 its next image's index, both by the atom's id, so an atom that crosses the reservoir's
 boundary keeps its place in the chain of images and none is fed twice or skipped.
@@ -37,8 +52,11 @@ import json
 import numpy as np
 import xarray as xr
 
+from ..failures import SolverUnstable
+from .forces import pair_power
 from .simulation import MDSimulation
 
+SEAM_WORK = ("returned", "kept")  # what becomes of the copy's excess work at the seam
 LIVE_PREFIX = "live_"  # the reservoir's checkpoint variables inside a window checkpoint
 
 
@@ -47,9 +65,23 @@ class LiveReservoir:
     atom's unwrapped position ``unwrap`` (N, 3) [σ] indexed by its id (module docstring)."""
 
     def __init__(
-        self, sim: MDSimulation, unwrap: np.ndarray | None = None, image: np.ndarray | None = None
+        self,
+        sim: MDSimulation,
+        unwrap: np.ndarray | None = None,
+        image: np.ndarray | None = None,
+        seam_work: str = "kept",
+        returned: float = 0.0,
+        twins: np.ndarray | None = None,
     ) -> None:
+        if seam_work not in SEAM_WORK:
+            raise ValueError(f"seam_work = {seam_work!r}: one of {SEAM_WORK}")
         self.sim = sim
+        self.seam_work = seam_work
+        self.returned = float(returned)  # the work returned so far [ε] (``return_seam_work``)
+        # released atoms still by the seam, one row each: window id, reservoir id, the image
+        # it was released from (``record_release``)
+        tw = np.zeros((0, 3)) if twins is None else np.asarray(twins)
+        self.twins = tw.astype(np.int64).reshape(-1, 3)
         s = sim.state
         n = s.n
         if unwrap is None:
@@ -96,6 +128,71 @@ class LiveReservoir:
         v[s.ids] = s.v
         return v
 
+    def record_release(self, window_ids: np.ndarray, reservoir_ids: np.ndarray,
+                       images: np.ndarray) -> None:  # fmt: skip
+        """Note that reservoir atoms ``reservoir_ids``, released from their images ``images``,
+        are now the window's atoms ``window_ids`` (their twins, ``return_seam_work``)."""
+        rows = np.column_stack([window_ids, reservoir_ids, images]).astype(np.int64)
+        self.twins = np.concatenate([self.twins, rows])
+
+    def keep_twins(self, window_ids: np.ndarray) -> None:
+        """Forget the twins of every released atom but ``window_ids`` (those still by the
+        seam)."""
+        self.twins = self.twins[np.isin(self.twins[:, 0], window_ids)]
+
+    def twin_positions(self, rows: np.ndarray, offset: float) -> np.ndarray:
+        """Positions (len(rows), 3) [σ] in the window of the reservoir twins of released atoms
+        (``twins`` rows): the images they were released from, carried on with the reservoir."""
+        X = self.unwrap[rows[:, 1]].copy()
+        X[:, 0] += rows[:, 2] * self.L[0] + offset
+        return X
+
+    def return_seam_work(self, s, copy: np.ndarray, x_hi: float, lag: float, u_in: float,
+                         offset: float, dt: float) -> float:  # fmt: skip
+        """Take back from the window's atoms at the seam the copy's excess work in the coming
+        step of ``dt`` [τ] (module docstring), and return it [ε].
+
+        W = dt [Σ_a Σ_b F_ba(x_a) · v_b − Σ_a Σ_b F_ba(x̃_a) · v_b] (``forces.pair_power``)
+        over the released atoms a with a twin (x̃_a, ``twin_positions`` at ``offset``) beyond
+        x_hi − ``lag`` − rc (every copy atom lies beyond x_hi − ``lag``, the distance an image
+        travels between releases) and the copy atoms b (``copy``, a mask of the window state
+        ``s``) within rc of them, v_b the reservoir's velocity + u_in: the window and the
+        reservoir are at the same instant. The a atoms' velocities about their own mean are
+        scaled by √(1 − W/K), K their kinetic energy about that mean: momentum is kept and
+        the energy changes by exactly −W."""
+        if not self.twins.size:
+            return 0.0
+        rc = self.sim.lj.rc
+        x = s.x
+        idx = np.flatnonzero((s.ids >= 0) & (x[:, 0] > x_hi - lag - rc))
+        order = np.argsort(self.twins[:, 0], kind="stable")
+        known = self.twins[order, 0]
+        pos = np.minimum(np.searchsorted(known, s.ids[idx]), known.size - 1)
+        has = known[pos] == s.ids[idx]
+        a = idx[has]
+        if a.size < 2:
+            return 0.0
+        near = copy & (x[:, 0] < float(x[a, 0].max()) + rc)
+        vb = self.velocities()[-1 - s.ids[near]] + np.array([u_in, 0.0, 0.0])
+        xb = x[near]
+        xt = self.twin_positions(self.twins[order[pos[has]]], offset)
+        rc2 = rc * rc
+        work = dt * (pair_power(x[a], xb, vb, s.L, s.periodic, rc2)
+                     - pair_power(xt, xb, vb, s.L, s.periodic, rc2))  # fmt: skip
+        v = s.v[a]
+        mean = v.mean(axis=0)
+        th = v - mean
+        kin = 0.5 * float(np.sum(th * th))
+        if not work < kin:
+            raise SolverUnstable(
+                "seam_work",
+                f"the copy's excess work at the seam, {work:.4g} eps in one step, exceeds the "
+                f"kinetic energy of the {a.size} atoms there ({kin:.4g} eps)",
+            )
+        s.v[a] = mean + np.sqrt(1.0 - work / kin) * th
+        self.returned += work
+        return work
+
     def to_dataset(self) -> xr.Dataset:
         """The reservoir's checkpoint (``MDSimulation.to_dataset``, bit-exact) and its
         unwrapped positions, every name prefixed ``live_``, its seal in ``live_attrs``."""
@@ -106,7 +203,13 @@ class LiveReservoir:
                                        "long_name": "live reservoir unwrapped positions, by id"})  # fmt: skip
         out[LIVE_PREFIX + "image"] = ((LIVE_PREFIX + "atom",), self.image.copy(),
                                       {"units": "1", "long_name": "next image index, by id"})  # fmt: skip
-        out.attrs = {LIVE_PREFIX + "attrs": json.dumps(ds.attrs)}
+        out[LIVE_PREFIX + "twins"] = ((LIVE_PREFIX + "twin", LIVE_PREFIX + "twin_field"),
+                                      self.twins.copy(), {"units": "1", "long_name":
+                                      "released atoms by the seam: window id, reservoir id, "
+                                      "image released from"})  # fmt: skip
+        out.attrs = {LIVE_PREFIX + "attrs": json.dumps(ds.attrs),
+                     LIVE_PREFIX + "seam": json.dumps({"seam_work": self.seam_work,
+                                                      "returned": self.returned})}  # fmt: skip
         return out
 
     @classmethod
@@ -115,10 +218,14 @@ class LiveReservoir:
         key = LIVE_PREFIX + "attrs"
         if key not in ds.attrs:
             return None
-        own = (LIVE_PREFIX + "unwrap", LIVE_PREFIX + "image")
+        own = (LIVE_PREFIX + "unwrap", LIVE_PREFIX + "image", LIVE_PREFIX + "twins")
         names = [k for k in ds.data_vars if k.startswith(LIVE_PREFIX) and k not in own]
         sub = ds[names]
         sub = sub.rename({k: k[len(LIVE_PREFIX) :] for k in {*sub.variables, *sub.dims}})
         sub.attrs = json.loads(ds.attrs[key])
         sim = MDSimulation.from_dataset(sub, source)
-        return cls(sim, ds[own[0]].values.copy(), ds[own[1]].values)
+        # checkpoints written before the seam's work was returned kept it
+        seam = json.loads(ds.attrs.get(LIVE_PREFIX + "seam", '{"seam_work": "kept"}'))
+        twins = ds[own[2]].values if own[2] in ds else None
+        return cls(sim, ds[own[0]].values.copy(), ds[own[1]].values, seam["seam_work"],
+                   seam.get("returned", 0.0), twins)  # fmt: skip

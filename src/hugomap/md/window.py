@@ -251,6 +251,7 @@ class MDWindow:
         kit=None,
         segment: float = 0.0,
         inflow: str = "frozen",
+        seam_work: str = "kept",
     ) -> MDWindow:
         """Cut a window out of a piston run (piston frame: piston at rest at the left wall,
         upstream material at −u_p) with the front at ``front_fraction`` of ``length`` from
@@ -264,7 +265,9 @@ class MDWindow:
         ``kit`` (default ``MDKit``) builds the domain simulation; ``wall_layer`` (default 4
         of the kit's ``scale``) is kept clear of the piston run's walls. ``segment`` > 0
         lays the snapshot frozen behind ``x_hi`` a segment at a time, the longest whole
-        fraction of L_r not above it (and at least one; module docstring)."""
+        fraction of L_r not above it (and at least one; module docstring). ``inflow``:
+        "frozen" or "live"; a live one's ``seam_work`` (``md.live_inflow``): "returned" (the
+        work its copy's thermal motion does at the seam is taken back) or "kept"."""
         kit = kit if kit is not None else _kit_of(sim)
         unit = kit.units[0]
         wall_layer = 4.0 * kit.scale if wall_layer is None else wall_layer
@@ -339,7 +342,8 @@ class MDWindow:
                     "bad_config", "a live inflow reservoir runs on the numba MD backend only"
                 )
             # the copy laid above is the reservoir at t = 0: unwrap = rx, X = rx + x_hi e_x
-            live = LiveReservoir(kit.periodic(rx.copy(), rv.copy(), r.L.copy(), sim.dt))
+            live = LiveReservoir(kit.periodic(rx.copy(), rv.copy(), r.L.copy(), sim.dt),
+                                 seam_work=seam_work)  # fmt: skip
         elif inflow != "frozen":
             raise ValueError(f"inflow = {inflow!r}: 'frozen' or 'live'")
         return cls(dom, rx, rv, geom, u_in, u_out, x_face_in=x_hi, x_face=x_lo,
@@ -381,16 +385,25 @@ class MDWindow:
                 self._steer_outflow(k * self.sim.dt)
 
     def _drive_copy(self) -> None:
-        """Live inflow: step the reservoir and give each atom of the copy behind ``x_hi`` the
-        velocity that carries it, in the coming step, onto its reservoir trajectory's image
-        (``LiveReservoir.images``; module docstring of ``md.live_inflow``)."""
+        """Live inflow: take back the copy's excess work of the coming step if it is returned
+        (``LiveReservoir.return_seam_work``), step the reservoir and give each atom of the
+        copy behind ``x_hi`` the velocity that carries it, in the coming step, onto its
+        reservoir trajectory's image (``LiveReservoir.images``; module docstring of
+        ``md.live_inflow``)."""
         s, dt = self.sim.state, self.sim.dt
-        self.live.step(dt)
         copy = (s.ids < 0) & (s.ids >= -self.n_res)
+        if self.live.seam_work == "returned":  # the window and the reservoir both at t
+            self.live.return_seam_work(s, copy, self.geom.x_hi, self._lag(), self.u_in,
+                                       self.x_face_in, dt)  # fmt: skip
+        self.live.step(dt)
         X = self.live.images(-1 - s.ids[copy], self.x_face_in + self.u_in * dt)
         d = X - s.x[copy]
         d[:, 1:] -= s.L[1:] * np.rint(d[:, 1:] / s.L[1:])
         s.v[copy] = d / dt
+
+    def _lag(self) -> float:
+        """How far past x_hi an image travels between two releases [σ]."""
+        return -self.u_in * self.geom.sync_steps * self.sim.dt
 
     def _update_boundaries(self) -> None:
         """Release the inflow copy that reached ``x_hi`` and lay the next one behind it (live:
@@ -424,8 +437,14 @@ class MDWindow:
             m = copy.copy()
             m[copy] = gone[-1 - ids[copy]]
             v[m] = self.live.velocities()[-1 - ids[m]] + np.array([self.u_in, 0.0, 0.0])
+            r = -1 - ids[m]
             ids[m] = self.next_id + np.arange(int(m.sum()), dtype=np.int64)
             self.next_id += int(m.sum())
+            if self.live.seam_work == "returned":  # twins of the released atoms
+                self.live.record_release(ids[m], r, self.live.image[r])
+                # ...while they are within reach of the copy, or will be before the next update
+                self.live.keep_twins(ids[(ids >= 0) & (x[:, 0] > g.x_hi - 2 * self._lag()
+                                                       - self.sim.lj.rlist)])  # fmt: skip
             # the same atoms' next images, L_r behind: the reservoir's trajectories go on
             self.live.image[crossed] += 1
             xi = self.live.images(crossed, self.x_face_in)
