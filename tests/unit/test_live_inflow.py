@@ -132,8 +132,9 @@ def test_the_seams_excess_work_is_taken_back_with_momentum_kept(window) -> None:
     """``LiveReservoir.return_seam_work``: each released atom by the seam has a twin, its
     reservoir atom carried on from the image it left, which sits where the atom was released
     (round-off: 1e-9 σ); the window's atoms there lose exactly the copy's excess work W = dt
-    (``pair_power`` on them − on their twins) (their kinetic energy about their mean falls by
-    W), their momentum is kept and no other atom moves; the twins and the work returned so far
+    (``pair_power`` on them − on their twins), taken from those within rc of the copy (their
+    kinetic energy about their mean falls by W), their momentum is kept and no other atom
+    moves; the twins and the work returned so far
     travel in the checkpoint, which resumes bit for bit. Round-off bounds: 1e-12 of the
     kinetic energy and of the momentum's scale."""
     from hugomap.md.forces import pair_power
@@ -163,6 +164,12 @@ def test_the_seams_excess_work_is_taken_back_with_momentum_kept(window) -> None:
     xt = win.live.twin_positions(rows, win.x_face_in)
     args = (s.x[near], vb, s.L, s.periodic, rc * rc)
     expect = dt * (pair_power(s.x[a], *args) - pair_power(xt, *args))
+    d = s.x[a][:, None, :] - s.x[near][None, :, :]
+    d[..., 1:] -= s.L[1:] * np.rint(d[..., 1:] / s.L[1:])
+    took = np.zeros_like(zone)  # the zone's atoms within rc of the copy: the work went to them
+    took[a[((d**2).sum(-1) < rc * rc).any(axis=1)]] = True
+    assert 1 < took.sum() <= zone.sum()
+    zone = took
     v0 = s.v.copy()
     kin0 = 0.5 * np.sum((v0[zone] - v0[zone].mean(axis=0)) ** 2)
     before = win.live.returned

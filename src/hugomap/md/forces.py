@@ -226,3 +226,30 @@ def pair_power(
             _, fr = lj_pair(dx * dx + dy * dy + dz * dz, rc2, 0.0)
             p += fr * (dx * vb[j, 0] + dy * vb[j, 1] + dz * vb[j, 2])
     return p
+
+
+@njit
+def in_reach(
+    xa: np.ndarray, xb: np.ndarray, L: np.ndarray, periodic: np.ndarray, rc2: float
+) -> np.ndarray:
+    """Which atoms a have at least one atom b within the cutoff (r² < ``rc2`` [σ²], the
+    minimum image taken in the periodic dimensions): the atoms ``pair_power``'s b atoms act
+    on. All pairs are visited, as there."""
+    Lp = np.zeros(3)
+    for d in range(3):
+        if periodic[d]:
+            Lp[d] = L[d]
+    iL = 1.0 / L
+    hit = np.zeros(xa.shape[0], dtype=np.bool_)
+    for i in range(xa.shape[0]):
+        for j in range(xb.shape[0]):
+            dx = xa[i, 0] - xb[j, 0]
+            dy = xa[i, 1] - xb[j, 1]
+            dz = xa[i, 2] - xb[j, 2]
+            dx -= Lp[0] * np.rint(dx * iL[0])
+            dy -= Lp[1] * np.rint(dy * iL[1])
+            dz -= Lp[2] * np.rint(dz * iL[2])
+            if dx * dx + dy * dy + dz * dz < rc2:
+                hit[i] = True
+                break
+    return hit
