@@ -281,3 +281,27 @@ def test_pair_power_is_the_work_moving_atoms_do_on_the_others() -> None:
     assert abs(gained) > 1.0  # the pass exchanges a real amount of energy
     assert abs(work - gained) < 1e-6 * abs(gained), (work, gained)
     assert pair_power(xa, xb, np.zeros((1, 3)), L, periodic, rc2) == 0.0
+
+
+def test_in_reach_marks_the_atoms_within_the_cutoff_of_any_other() -> None:
+    """``in_reach``: the a atoms with a b atom closer than rc, the minimum image taken in the
+    periodic dimensions only, as a brute-force NumPy count of the same pairs says (exact:
+    the same comparisons)."""
+    from hugomap.md.forces import in_reach
+
+    rng = np.random.default_rng(3)
+    L = np.array([10.0, 6.0, 6.0])
+    periodic = np.array([False, True, True])
+    xa = rng.uniform(0.0, 1.0, (40, 3)) * L
+    xb = rng.uniform(0.0, 1.0, (30, 3)) * L
+    rc2 = 1.5**2
+    d = xa[:, None, :] - xb[None, :, :]
+    d[..., 1:] -= L[1:] * np.rint(d[..., 1:] / L[1:])
+    expect = ((d**2).sum(-1) < rc2).any(axis=1)
+    got = in_reach(xa, xb, L, periodic, rc2)
+    assert 0 < expect.sum() < expect.size
+    np.testing.assert_array_equal(got, expect)
+    # x is not periodic: an atom at the far x edge does not reach one at the near edge
+    assert not in_reach(np.array([[0.2, 3.0, 3.0]]), np.array([[9.9, 3.0, 3.0]]), L, periodic, rc2)[
+        0
+    ]
