@@ -267,7 +267,8 @@ class MDWindow:
         lays the snapshot frozen behind ``x_hi`` a segment at a time, the longest whole
         fraction of L_r not above it (and at least one; module docstring). ``inflow``:
         "frozen" or "live"; a live one's ``seam_work`` (``md.live_inflow``): "returned" (the
-        work its copy's thermal motion does at the seam is taken back) or "kept"."""
+        copy's excess work at the seam, over what it does on the released atoms' reservoir
+        twins, is taken back each step; the scene default) or "kept" (this default)."""
         kit = kit if kit is not None else _kit_of(sim)
         unit = kit.units[0]
         wall_layer = 4.0 * kit.scale if wall_layer is None else wall_layer
