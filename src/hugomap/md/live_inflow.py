@@ -37,8 +37,8 @@ seam's excess, heats the inflow: a uniform flow at 8.1 σ/τ (u_p = 1's D; 5 × 
 "returned"`` (``return_seam_work``; the scene default, ``MDWindow.from_piston``'s is
 "kept") it is taken back each step from the released atoms within rc of the copy (their
 velocities about their mean scaled, momentum kept): +0.02 ± 0.01 ε above E0, and the
-default liquid's AMW points at u_p = 1 start from the pole (the state ahead −0.000 ε
-above it on average over four seeds, against +0.021 kept). The twins are recorded only
+default liquid's AMW points at u_p = 1 start from the pole (the state ahead −0.002 ε
+above it on average over eight seeds, against +0.021 kept). The twins are recorded only
 when the work is returned (``record_release``).
 
 ``unwrap`` holds each atom's continuous position (its periodic jumps undone) and ``image``
