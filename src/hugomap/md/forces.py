@@ -191,6 +191,28 @@ def energy_virial_full(
 
 
 @njit
+def _image_lengths(L: np.ndarray, periodic: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The box lengths [σ] that wrap a pair (0 in a dimension that is not periodic) and 1/L."""
+    Lp = np.zeros(3)
+    for d in range(3):
+        if periodic[d]:
+            Lp[d] = L[d]
+    return Lp, 1.0 / L
+
+
+@njit
+def _min_image(
+    xa: np.ndarray, xb: np.ndarray, i: int, j: int, Lp: np.ndarray, iL: np.ndarray
+) -> tuple[float, float, float]:
+    """r_a[i] − r_b[j] [σ], the minimum image taken where ``Lp`` is nonzero."""
+    dx = xa[i, 0] - xb[j, 0]
+    dy = xa[i, 1] - xb[j, 1]
+    dz = xa[i, 2] - xb[j, 2]
+    return (dx - Lp[0] * np.rint(dx * iL[0]), dy - Lp[1] * np.rint(dy * iL[1]),
+            dz - Lp[2] * np.rint(dz * iL[2]))  # fmt: skip
+
+
+@njit
 def pair_power(
     xa: np.ndarray,
     xb: np.ndarray,
@@ -209,20 +231,11 @@ def pair_power(
     are visited (the callers pass the few hundred atoms on either side of a plane), the
     minimum image taken in the periodic dimensions.
     """
-    Lp = np.zeros(3)
-    for d in range(3):
-        if periodic[d]:
-            Lp[d] = L[d]
-    iL = 1.0 / L
+    Lp, iL = _image_lengths(L, periodic)
     p = 0.0
     for i in range(xa.shape[0]):
         for j in range(xb.shape[0]):
-            dx = xa[i, 0] - xb[j, 0]
-            dy = xa[i, 1] - xb[j, 1]
-            dz = xa[i, 2] - xb[j, 2]
-            dx -= Lp[0] * np.rint(dx * iL[0])
-            dy -= Lp[1] * np.rint(dy * iL[1])
-            dz -= Lp[2] * np.rint(dz * iL[2])
+            dx, dy, dz = _min_image(xa, xb, i, j, Lp, iL)
             _, fr = lj_pair(dx * dx + dy * dy + dz * dz, rc2, 0.0)
             p += fr * (dx * vb[j, 0] + dy * vb[j, 1] + dz * vb[j, 2])
     return p
@@ -235,20 +248,11 @@ def in_reach(
     """Which atoms a have at least one atom b within the cutoff (r² < ``rc2`` [σ²], the
     minimum image taken in the periodic dimensions): the atoms ``pair_power``'s b atoms act
     on. All pairs are visited, as there."""
-    Lp = np.zeros(3)
-    for d in range(3):
-        if periodic[d]:
-            Lp[d] = L[d]
-    iL = 1.0 / L
+    Lp, iL = _image_lengths(L, periodic)
     hit = np.zeros(xa.shape[0], dtype=np.bool_)
     for i in range(xa.shape[0]):
         for j in range(xb.shape[0]):
-            dx = xa[i, 0] - xb[j, 0]
-            dy = xa[i, 1] - xb[j, 1]
-            dz = xa[i, 2] - xb[j, 2]
-            dx -= Lp[0] * np.rint(dx * iL[0])
-            dy -= Lp[1] * np.rint(dy * iL[1])
-            dz -= Lp[2] * np.rint(dz * iL[2])
+            dx, dy, dz = _min_image(xa, xb, i, j, Lp, iL)
             if dx * dx + dy * dy + dz * dz < rc2:
                 hit[i] = True
                 break
