@@ -168,8 +168,7 @@ class LiveReservoir:
         rc = self.sim.lj.rc
         x = s.x
         idx = np.flatnonzero((s.ids >= 0) & (x[:, 0] > x_hi - lag - rc))
-        order = np.argsort(self.twins[:, 0], kind="stable")
-        known = self.twins[order, 0]
+        known = self.twins[:, 0]  # ascending: window ids are handed out in order
         pos = np.minimum(np.searchsorted(known, s.ids[idx]), known.size - 1)
         has = known[pos] == s.ids[idx]
         a = idx[has]
@@ -178,7 +177,7 @@ class LiveReservoir:
         near = copy & (x[:, 0] < float(x[a, 0].max()) + rc)
         vb = self.velocities()[-1 - s.ids[near]] + np.array([u_in, 0.0, 0.0])
         xb = x[near]
-        xt = self.twin_positions(self.twins[order[pos[has]]], offset)
+        xt = self.twin_positions(self.twins[pos[has]], offset)
         rc2 = rc * rc
         work = dt * (pair_power(x[a], xb, vb, s.L, s.periodic, rc2)
                      - pair_power(xt, xb, vb, s.L, s.periodic, rc2))  # fmt: skip
