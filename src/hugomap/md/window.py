@@ -394,8 +394,7 @@ class MDWindow:
         s, dt = self.sim.state, self.sim.dt
         copy = (s.ids < 0) & (s.ids >= -self.n_res)
         if self.live.seam_work == "returned":  # the window and the reservoir both at t
-            self.live.return_seam_work(s, copy, self.geom.x_hi, self._lag(), self.u_in,
-                                       self.x_face_in, dt)  # fmt: skip
+            self.live.return_seam_work(s, copy, self.geom.x_hi, self._lag(), self.x_face_in, dt)
         self.live.step(dt)
         X = self.live.images(-1 - s.ids[copy], self.x_face_in + self.u_in * dt)
         d = X - s.x[copy]
