@@ -187,4 +187,3 @@ def test_the_seams_excess_work_is_taken_back_with_momentum_kept(window) -> None:
     win.advance(100)
     back.advance(100)
     assert _digest(back) == _digest(win) and back.live.returned == win.live.returned
-

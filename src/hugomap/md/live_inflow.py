@@ -29,17 +29,20 @@ The seam's work. The copy follows the reservoir and never recoils: once the wind
 by the seam have drifted off their reservoir images (0.1–0.2 σ within rc of the copy, at
 8.1 σ/τ), the copy is a driven, unyielding boundary that does on them work it would not do
 on its own fluid. The power it delivers to atoms a is P = Σ_a Σ_b F_ba · v_b over the
-copy's atoms b (``forces.pair_power``); the same sum over the released atoms' reservoir
+copy's atoms b (``forces.pair_power``), v_b their velocity in the copy's own frame, which
+moves at u_in with the material it feeds; the same sum over the released atoms' reservoir
 twins (atom r released from image k sits, in the reservoir, at ``unwrap_r + (k L_r +
 offset) e_x``) is what the fluid itself passes across the seam. Their difference, the
 seam's excess, heats the inflow: a uniform flow at 8.1 σ/τ (u_p = 1's D; 5 × 5 cells,
-40 τ) arrives 0.05–0.08 ε per atom above the pole's E0 with it kept. With ``seam_work =
-"returned"`` (``return_seam_work``; the scene default, ``MDWindow.from_piston``'s is
-"kept") it is taken back each step from the released atoms within rc of the copy (their
-velocities about their mean scaled, momentum kept): +0.02 ± 0.01 ε above E0, and the
-default liquid's AMW points at u_p = 1 start from the pole (the state ahead −0.002 ε
-above it on average over eight seeds, against +0.021 kept). The twins are recorded only
-when the work is returned (``record_release``).
+40 τ, seeds 5–7) arrives +0.047 to +0.078 ε per atom above the pole's E0 with it kept.
+With ``seam_work = "returned"`` (``return_seam_work``; the scene default,
+``MDWindow.from_piston``'s is "kept") it is taken back each step from the released atoms
+within rc of the copy (their velocities about their mean scaled, momentum kept): −0.023 to
++0.018 ε, and the flow's speed is the inflow's as when kept (u + V −0.018 to +0.016 σ/τ,
+kept −0.003 to +0.012). Summed in the window's frame instead (v_b + u_in), the excess also
+held u_in · ΔP, ΔP the copy's excess push: that term is the flow's, not heat; it made the
+per-step excess 5 times noisier (``return_seam_work``), left +0.036 to +0.045 ε and moved the flow by +0.027 to
++0.036 σ/τ. The twins are recorded only when the work is returned (``record_release``).
 
 ``unwrap`` holds each atom's continuous position (its periodic jumps undone) and ``image``
 its next image's index, both by the atom's id, so an atom that crosses the reservoir's
@@ -162,13 +165,13 @@ class LiveReservoir:
         moves at u_in with the material it feeds, so W is heat. (In the window's frame, v_b +
         u_in, it also holds u_in · ΔP, ΔP the excess impulse the copy gives: the push that
         keeps the released atoms off the copy, which belongs to their flow, not their heat.
-        On a uniform flow at 8 σ/τ that term made W's sd per step 0.78 ε against 0.15 ε
-        without it, and its sum over 2 τ changed the heat returned from +25 to −5.5 ε.) The
-        velocities of the a atoms within rc of a copy
+        On the unit tests' window, a uniform flow at 8 σ/τ of 4 × 4 cells, that term made
+        W's sd per step 0.78 ε against 0.15 ε without it, and its sum over 2 τ turned the
+        heat returned from +25 to −5.5 ε.) The velocities of the a atoms within rc of a copy
         atom (``forces.in_reach``: those the work went to) about their own mean are scaled by
         √(1 − W/K), K their kinetic energy about that mean: momentum is kept and the energy
-        changes by exactly −W. (Scaling every a atom, those just released included, cooled a
-        uniform flow at 8.1 σ/τ 0.06–0.07 ε per atom below E0.)"""
+        changes by exactly −W. (Scaling every a atom, those just released included, with the window's-frame
+        sum, cooled a uniform flow at 8.1 σ/τ 0.06–0.07 ε per atom below E0.)"""
         if not self.twins.size:
             return 0.0
         rc = self.sim.lj.rc
