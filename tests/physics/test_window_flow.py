@@ -169,9 +169,10 @@ def test_the_seams_excess_work_returned_leaves_a_subsonic_flow_at_the_pole():
     the reservoir's pole E0 and T0 (``make_reservoir``). Measured (seed 5, 5 × 5 cells, 10 τ
     flushed, 20 τ averaged, 8–21 σ downstream of x_hi): kept, E − E0 = +0.46 ε per atom and
     T = 2.21; returned, −0.005 ± 0.024 ε (8-block error) and T 2.000, with 0.34 ε per
-    inflowing atom taken back (summed in the window's frame: +0.009 ± 0.030, 2.009, 0.36). Bounds: E within 0.09 ε of E0 (3 block errors; a fifth of the
-    kept heat) and T within 2 % of T0 (3 of its block errors, 0.015); at least 0.2 ε per atom
-    returned, so the flow is at the pole because the work was taken back."""
+    inflowing atom taken back (summed in the window's frame: +0.009 ± 0.030, 2.009, 0.36).
+    Bounds: E within 0.09 ε of E0 (3 block errors; a fifth of the kept heat) and T within
+    2 % of T0 (3 of its block errors, 0.015); at least 0.2 ε per atom returned, so the flow
+    is at the pole because the work was taken back."""
     sample = fcc_state((22, 5, 5), RHO0, T0, seed=5, periodic_x=False)
     sim = MDSimulation(sample, LJ, DT, T_bath=T0, tau_bath=0.2, seed=5)
     sim.advance(1500)

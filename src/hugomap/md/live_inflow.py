@@ -41,8 +41,9 @@ within rc of the copy (their velocities about their mean scaled, momentum kept):
 +0.018 ε, and the flow's speed is the inflow's as when kept (u + V −0.018 to +0.016 σ/τ,
 kept −0.003 to +0.012). Summed in the window's frame instead (v_b + u_in), the excess also
 held u_in · ΔP, ΔP the copy's excess push: that term is the flow's, not heat; it made the
-per-step excess 5 times noisier (``return_seam_work``), left +0.036 to +0.045 ε and moved the flow by +0.027 to
-+0.036 σ/τ. The twins are recorded only when the work is returned (``record_release``).
+per-step excess 5 times noisier (``return_seam_work``), left +0.036 to +0.045 ε and moved
+the flow by +0.027 to +0.036 σ/τ. The twins are recorded only when the work is returned
+(``record_release``).
 
 ``unwrap`` holds each atom's continuous position (its periodic jumps undone) and ``image``
 its next image's index, both by the atom's id, so an atom that crosses the reservoir's
@@ -170,8 +171,9 @@ class LiveReservoir:
         heat returned from +25 to −5.5 ε.) The velocities of the a atoms within rc of a copy
         atom (``forces.in_reach``: those the work went to) about their own mean are scaled by
         √(1 − W/K), K their kinetic energy about that mean: momentum is kept and the energy
-        changes by exactly −W. (Scaling every a atom, those just released included, with the window's-frame
-        sum, cooled a uniform flow at 8.1 σ/τ 0.06–0.07 ε per atom below E0.)"""
+        changes by exactly −W. (Scaling every a atom, those just released included, cooled a
+        uniform flow at 8.1 σ/τ 0.06–0.07 ε per atom below E0, the work then summed in the
+        window's frame.)"""
         if not self.twins.size:
             return 0.0
         rc = self.sim.lj.rc
