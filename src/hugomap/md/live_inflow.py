@@ -39,10 +39,9 @@ With ``seam_work = "returned"`` (``return_seam_work``; the scene default,
 ``MDWindow.from_piston``'s is "kept") it is taken back each step from the released atoms
 within rc of the copy (their velocities about their mean scaled, momentum kept): −0.023 to
 +0.018 ε, and the flow's speed is the inflow's as when kept (u + V −0.018 to +0.016 σ/τ,
-kept −0.003 to +0.012). Summed in the window's frame instead (v_b + u_in), the excess also
-held u_in · ΔP, ΔP the copy's excess push: that term is the flow's, not heat; it made the
-per-step excess 5 times noisier (``return_seam_work``), left +0.036 to +0.045 ε and moved
-the flow by +0.027 to +0.036 σ/τ. The twins are recorded only when the work is returned
+kept −0.003 to +0.012). Summed in the window's frame instead (v_b + u_in, which adds the
+copy's push on the flow: ``return_seam_work``), it left +0.036 to +0.045 ε and moved the
+flow by +0.027 to +0.036 σ/τ. The twins are recorded only when the work is returned
 (``record_release``).
 
 ``unwrap`` holds each atom's continuous position (its periodic jumps undone) and ``image``
