@@ -132,6 +132,12 @@ def main(argv: list[str] | None = None) -> int:
         "scenes found under --results)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable JSON output")
+    p.add_argument(
+        "--full",
+        action="store_true",
+        help="never cut the detail column (by default it is cut to the terminal's width, "
+        "$COLUMNS if set; output to a file or pipe is never cut)",
+    )
     p = add(
         "export-lammps",
         "write an MD checkpoint (sample, loaded, partial piston, window) as a LAMMPS data "
@@ -170,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
         from .status import run_status
 
         try:
-            return run_status(args.results, args.config, as_json=args.json)
+            return run_status(args.results, args.config, as_json=args.json, full=args.full)
         except ConfigError as exc:
             print(exc, file=sys.stderr)
             return 2

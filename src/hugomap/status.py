@@ -474,9 +474,16 @@ def _age(seconds: float) -> str:
     return f"{seconds / 3600:.1f} h"
 
 
-def _one_line(text: str, limit: int = 100) -> str:
+MIN_DETAIL = 20  # the narrowest detail column a cut leaves [characters]
+
+
+def _one_line(text: str, limit: int | None = None) -> str:
+    """``text`` on one line (whitespace runs made one space), cut to ``limit`` characters
+    with a trailing ``...`` where longer; ``limit`` None: never cut."""
     text = " ".join(text.split())
-    return text if len(text) <= limit else text[: limit - 3] + "..."
+    if limit is None or len(text) <= limit:
+        return text
+    return text[: max(limit - 3, 0)] + "..."
 
 
 def _counts_text(c: dict[str, int]) -> str:
@@ -522,9 +529,13 @@ def _detail(p: dict[str, Any]) -> str:
     return detail
 
 
-def format_table(report: dict[str, Any]) -> str:
+def format_table(report: dict[str, Any], width: int | None = None) -> str:
     """The report as a human-readable table, one block per scene: counts (all points, then
-    per scheme), then one row per piston velocity and scheme."""
+    per scheme), then one row per piston velocity and scheme.
+
+    ``width``: the line width to fit (a terminal's columns): a row's detail column and a
+    crashed sample's message are cut to what is left of it, never to fewer than
+    ``MIN_DETAIL`` characters; None: nothing is cut."""
     out = [f"results: {report['results']}"]
     if not report["scenes"]:
         out.append("no scenes found")
@@ -548,10 +559,13 @@ def format_table(report: dict[str, Any]) -> str:
                 cs = sc["counts_by_scheme"][s]
                 out.append(f"  {s + ':':<{w + 1}} {cs['total']} points: {_counts_text(cs)}")
         if sc["sample"] not in ("ok", "missing"):
-            out.append(f"  sample: {_one_line(sc['sample'])}")
+            limit = None if width is None else max(width - len("  sample: "), MIN_DETAIL)
+            out.append(f"  sample: {_one_line(sc['sample'], limit)}")
         rows = [("u_p", "scheme", "state", "detail")]
-        rows += [(p["tag"], p["scheme"], p["state"], _one_line(_detail(p))) for p in sc["points"]]
+        rows += [(p["tag"], p["scheme"], p["state"], _detail(p)) for p in sc["points"]]
         w0, w1, w2 = (max(len(r[i]) for r in rows) for i in range(3))
+        limit = None if width is None else max(width - (w0 + w1 + w2 + 8), MIN_DETAIL)
+        rows = [(a, s, b, _one_line(d, limit)) for a, s, b, d in rows]
         out += [f"  {a:>{w0}}  {s:<{w1}}  {b:<{w2}}  {d}".rstrip() for a, s, b, d in rows]
     return "\n".join(out)
 
@@ -561,6 +575,7 @@ def run_status(
     config_path: str | Path | None = None,
     as_json: bool = False,
     stream: TextIO | None = None,
+    full: bool = False,
 ) -> int:
     """What ``python -m hugomap status`` does: print the report; return the exit status.
 
@@ -568,7 +583,12 @@ def run_status(
     aggregates' ``config_json``, the scene files' ``scene_config``); where the results record
     none (nothing has run yet), ``config/config.yaml`` if it exists; else the scenes on
     disk. A config that does not validate raises ``ConfigError``.
+
+    The table's detail column is cut to the terminal's width (``shutil.get_terminal_size``,
+    which honours ``$COLUMNS``) only where ``stream`` is a terminal and ``full`` is False;
+    written to a file or a pipe, or with ``full``, every row is whole.
     """
+    import shutil
     import sys
 
     stream = stream or sys.stdout
@@ -588,5 +608,7 @@ def run_status(
     else:
         if report["config"]:
             report["results"] += f" (config {report['config']})"
-        stream.write(format_table(report) + "\n")
+        tty = not full and hasattr(stream, "isatty") and stream.isatty()
+        width = shutil.get_terminal_size().columns if tty else None
+        stream.write(format_table(report, width) + "\n")
     return 0

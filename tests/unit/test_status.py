@@ -10,8 +10,10 @@ config (top level, or the scene's own ``schemes``) has its own row per piston ve
 
 from __future__ import annotations
 
+import io
 import json
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -22,7 +24,7 @@ from hugomap.cli import main
 from hugomap.config import validate_config
 from hugomap.io.atomic import write_json, write_netcdf
 from hugomap.io.dataset import lj_units, point_dataset
-from hugomap.status import format_table, sweep_status
+from hugomap.status import format_table, run_status, sweep_status
 
 ROOT = Path(__file__).resolve().parents[2]
 NOW = 1.9e9  # a fixed "now" for checkpoint ages [s since the epoch]
@@ -465,3 +467,44 @@ def test_without_config_the_recorded_one_is_read(
     empty.mkdir()
     assert main(["status", "--results", str(empty), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["config"] == "config/config.yaml"
+
+
+class _Terminal(io.StringIO):
+    """A stream that says it is a terminal."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_detail_fits_the_terminal_and_is_whole_elsewhere(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A long diagnostic is cut to the terminal's width ($COLUMNS), whatever that width;
+    written to a pipe or with --full it is whole."""
+    monkeypatch.chdir(tmp_path)  # no config/config.yaml: the scene comes from disk
+    res = tmp_path / "results"
+    long = "jump residuals: " + ", ".join(f"term {i} +{i}.000%" for i in range(30))
+    _point(res / "tiny/up1/piston.nc", "not_converged", long, 1.0)
+
+    def row(text: str) -> str:
+        return next(ln for ln in text.splitlines() if ln.split()[:2] == ["1", "piston"])
+
+    for columns in (80, 160, 250):
+        monkeypatch.setenv("COLUMNS", str(columns))
+        out = _Terminal()
+        assert run_status(res, None, stream=out) == 0
+        line = row(out.getvalue())
+        assert len(line) == columns and line.endswith("...")
+        assert line[:-3] in row(format_table(sweep_status(res, None)))
+        out = _Terminal()
+        assert run_status(res, None, stream=out, full=True) == 0
+        assert row(out.getvalue()).endswith(long)
+    monkeypatch.setenv("COLUMNS", "80")
+    assert main(["status", "--results", str(res)]) == 0  # captured: not a terminal
+    assert row(capsys.readouterr().out).endswith(long)
+    monkeypatch.setattr("sys.stdout", _Terminal())
+    assert main(["status", "--results", str(res), "--full"]) == 0
+    assert row(sys.stdout.getvalue()).endswith(long)
+    monkeypatch.setattr("sys.stdout", _Terminal())
+    assert main(["status", "--results", str(res)]) == 0
+    assert len(row(sys.stdout.getvalue())) == 80
