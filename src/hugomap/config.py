@@ -173,11 +173,19 @@ def load_schema(path: str | Path | None = None) -> dict:
     """The config schema (from ``path`` or the repository's ``workflow/schemas``) with the
     scene schema of every registered solver (``registry.scene_schema``) as ``$defs``
     ``<solver>_scene``: a scene whose ``solver`` is one of them is validated by its schema,
-    one without the key by the default solver's."""
+    one without the key by the default solver's, and one naming no registered solver only
+    by an enum of every registered solver (its one message lists them all, not the default
+    solver's own value and its required keys)."""
     with open(path or SCHEMA_PATH) as fh:
         schema = json.load(fh)
     defs = schema.setdefault("$defs", {})
-    branch: dict = {"$ref": f"#/$defs/{registry.DEFAULT_SOLVER}_scene"}
+    default = registry.DEFAULT_SOLVER
+    branch: dict = {
+        # no solver key (or not an object): the default solver's schema says what is wrong
+        "if": {"properties": {"solver": {"const": default}}},
+        "then": {"$ref": f"#/$defs/{default}_scene"},
+        "else": {"properties": {"solver": {"enum": list(registry.REGISTRY)}}},
+    }
     for name in reversed(list(registry.REGISTRY)):
         defs[f"{name}_scene"] = registry.scene_schema(name)
         if name == registry.DEFAULT_SOLVER:

@@ -258,6 +258,22 @@ def test_md_scene_without_solver_is_still_md() -> None:
     assert "scenes.tiny: 'solver' is a required property" in str(ei.value)
 
 
+@pytest.mark.parametrize("solver", ["foo", 3, None])
+def test_unknown_solver_lists_every_registered_one(solver: object) -> None:
+    """A scene naming no registered solver gets one message listing all of them, not the
+    default solver's own value and the keys its schema requires."""
+    from hugomap.registry import REGISTRY
+
+    cfg = tiny()
+    cfg["scenes"]["tiny"]["solver"] = solver
+    with pytest.raises(ConfigError) as ei:
+        validate_config(cfg)
+    assert str(ei.value).splitlines()[1:] == [
+        f"  scenes.tiny.solver = {solver!r}: allowed values {list(REGISTRY)}"
+    ]
+    assert {"md", "csph", "lammps"} <= set(REGISTRY)
+
+
 def test_validation_resolves_every_default() -> None:
     """Validation is the only place defaults are filled: a validated CSPH scene has its dx
     defaults, and the times derived per point are null; resolving again changes nothing."""
