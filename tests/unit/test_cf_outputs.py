@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 
 import netCDF4
@@ -28,15 +29,19 @@ import yaml
 from hugomap import campaign as cp
 from hugomap.config import ConfigError, validate_config
 from hugomap.io.atomic import write_json, write_netcdf
+from hugomap.io.checkpoint import MD_CHECKPOINT, MD_WINDOW_CHECKPOINT, seal_checkpoint
 from hugomap.io.dataset import (
     POINT_VARS,
     POLE_VARS,
     STATUS_FLAGS,
+    aggregate_points,
     cf_units,
     control_vars,
     lj_si_factors,
+    lj_units,
     open_points,
     open_scenes,
+    point_file_problem,
     profile_vars,
 )
 from hugomap.registry import backend
@@ -351,3 +356,54 @@ def test_open_scenes_and_points(tmp_path: Path) -> None:
         assert list(ps["status"].values) == ["ok", "not_converged", "ok", "atom_lost"]
         assert np.isnan(ps["D"].values[3]) and np.isfinite(ps["D"].values[:3]).all()
         assert np.isnan(ps["control_t"].values[:2]).all() and ps.sizes["window_k"] == 3
+
+
+def _md_checkpoint(path: Path, stage: str, kind=MD_CHECKPOINT) -> Path:
+    """A stand-in for an MD checkpoint in the point folder (``loaded.nc``, ``window.nc``):
+    atoms, a piston history of its own length, the stage's attributes, sealed as the stages
+    seal it."""
+    ds = xr.Dataset({"x": (("atom", "xyz"), np.zeros((5, 3))),
+                     "hist_t": (("sample",), np.arange(4.0)),
+                     "hist_sums": (("sample", "bin", "field"), np.zeros((4, 6, 2)))},
+                    attrs={"stage": stage, "status": "ok"})  # fmt: skip
+    return write_netcdf(seal_checkpoint(ds, kind), path)
+
+
+def test_open_points_skips_what_is_not_a_point(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A glob of a point folder's ``*.nc`` also finds its checkpoints (their history along
+    ``sample`` would not align with the points'), a failed stage's record and an aggregate:
+    open_points skips each with a warning naming it and what it is; aggregate_points,
+    whose paths are all meant to be points, refuses the first with a ValueError."""
+    cfg = _md_config()
+    pts = _md_points(tmp_path, cfg)
+    others = {
+        _md_checkpoint(tmp_path / "loaded.nc", "loaded"): "a checkpoint (format "
+        "hugomap-md-checkpoint/2, stage loaded)",
+        _md_checkpoint(tmp_path / "window.nc", "window", MD_WINDOW_CHECKPOINT): "a checkpoint "
+        "(window_format hugomap-md-window/2, stage window)",
+        write_netcdf(xr.Dataset(attrs={"stage": "window", "status": "nan", "diagnostic": "x"}),
+                     tmp_path / "failed.nc"): "failure record (stage window, status nan)",
+        aggregate([str(p) for p in pts], None, cfg, "tiny", tmp_path / "tiny.nc"):
+        "many points (status along scheme, u_p)",
+        _md_reference(tmp_path / "reference.nc", 3): "no 0-d status variable",
+    }  # fmt: skip
+    for path, what in others.items():
+        assert what in point_file_problem(path)
+    assert all(point_file_problem(p) is None for p in pts)
+    with (
+        caplog.at_level("WARNING", logger="hugomap"),
+        open_points(sorted(tmp_path.glob("*.nc"))) as ps,
+    ):
+        assert sorted(ps["point"].values) == sorted(str(p) for p in pts)
+        assert ps.sizes["sample"] == 9 and "x" not in ps
+    skipped = [r.getMessage() for r in caplog.records if "skipping" in r.getMessage()]
+    assert len(skipped) == len(others)
+    for path, what in others.items():
+        assert any(str(path) in m and what in m for m in skipped)
+    with pytest.raises(ValueError, match="no point file among 2 path"):
+        open_points(list(others)[:2])
+    for bad in others:
+        with pytest.raises(ValueError, match=re.escape(f"cannot aggregate {bad}: ")):
+            aggregate_points([*pts[:1], bad], "piston", None, cfg, "tiny", lj_units())

@@ -18,6 +18,7 @@ dimension that has none so that files of different lengths combine (``open_scene
 from __future__ import annotations
 
 import json
+import logging
 import math
 import re
 import subprocess
@@ -33,6 +34,8 @@ import xarray as xr
 from .. import __version__
 from ..failures import FAILURES
 from ..keys import config_hash
+
+log = logging.getLogger("hugomap")
 
 P_UNIT = "epsilon sigma^-3"
 POINT_VARS: dict[str, tuple[str, str]] = {
@@ -519,6 +522,43 @@ def _read_scalars(path: str | Path, var_attrs: dict[str, dict]) -> tuple[dict, d
         return values, {a: nc.getncattr(a) for a in nc.ncattrs()}
 
 
+CHECKPOINT_FORMAT_ATTRS = ("window_format", "format", "sim_format")  # io.checkpoint's kinds
+
+
+def _not_a_point(variables: Mapping, attrs: Mapping) -> str | None:
+    """None where a file with these variables (name: dimensions) and global attributes is
+    a point file; else what it is instead (see ``point_file_problem``)."""
+    dims = variables.get("status")
+    if dims is not None and len(dims) == 0:
+        return None
+    stage = f", stage {attrs['stage']}" if "stage" in attrs else ""
+    for a in CHECKPOINT_FORMAT_ATTRS:
+        if a in attrs:
+            return f"a checkpoint ({a} {attrs[a]}{stage}), not a point file"
+    if "stage" in attrs and "status" in attrs:
+        return (f"a checkpoint stage's failure record (stage {attrs['stage']}, status "
+                f"{attrs['status']}), not a point file")  # fmt: skip
+    if dims is not None:
+        return f"a dataset of many points (status along {', '.join(dims)}), not a point file"
+    return "not a point file (no 0-d status variable)"
+
+
+def point_file_problem(path: str | Path) -> str | None:
+    """None where ``path`` is a point file; else what it is instead, e.g. "a checkpoint
+    (format hugomap-md-checkpoint/2, stage loaded), not a point file".
+
+    A point file is told by its 0-d ``status`` variable, which ``point_dataset`` writes in
+    every point (ok or failed) and nothing else hugomap writes has: checkpoints (the
+    sample, ``loaded.nc``, ``window.nc``, a running piston's ``.part.nc``) carry ``status``
+    as an attribute, or not at all; a checkpoint stage's failure record has attributes
+    only; an aggregate's ``status`` lies along ``scheme`` × ``u_p``; a reference has none.
+    Only the file's header is read. A file netCDF cannot open raises (``OSError``)."""
+    with netCDF4.Dataset(str(path)) as nc:
+        variables = {k: v.dimensions for k, v in nc.variables.items()}
+        attrs = {a: nc.getncattr(a) for a in nc.ncattrs()}
+    return _not_a_point(variables, attrs)
+
+
 def aggregate_points(
     paths: Sequence[str | Path],
     scheme: str,
@@ -542,6 +582,10 @@ def aggregate_points(
     ``ref_point``, which gets an index coordinate when written (``cf_dataset``), so scenes
     with references of different lengths combine (``open_scenes``). (The SI companions of a
     scene with a ``units`` block are added to the joined aggregate: ``stages.aggregation``.)
+
+    A path that is not a point file (``point_file_problem``: a checkpoint, an aggregate)
+    is refused with a ValueError naming it and what it is: every path given is meant to be
+    a point of the aggregate, and one left out would be a point silently lost.
     """
     if not paths:
         raise ValueError(f"scene {scene}: no point files to aggregate")
@@ -550,6 +594,10 @@ def aggregate_points(
     first_attrs: dict = {}
     for i, p in enumerate(paths):
         values, gattrs = _read_scalars(p, var_attrs)
+        if not isinstance(values.get("status"), str):  # a 0-d status variable: a point
+            problem = point_file_problem(p)
+            if problem is not None:
+                raise ValueError(f"scene {scene}: cannot aggregate {p}: {problem}")
         rows.append(values)
         if i == 0:
             first_attrs = {k: v for k, v in gattrs.items() if k == "scene_config"}
@@ -629,5 +677,19 @@ def open_points(paths: Sequence[str | Path], **kwargs) -> xr.Dataset:
     each file's path; the front history (``sample``), steady profile (``bin``), control
     record (``window_k``, ``omega_sample``) and trials (``trial``) are NaN-padded to the
     longest; a variable a point lacks (a failed point's values) is NaN there. For many
-    points' scalars only, ``aggregate_points`` is much faster (it reads no arrays)."""
-    return _open_many(paths, "point", lambda ds: str(ds.encoding.get("source", "")), **kwargs)
+    points' scalars only, ``aggregate_points`` is much faster (it reads no arrays).
+
+    Paths that are not point files (``point_file_problem``: the checkpoints ``loaded.nc``,
+    ``window.nc``, ``sample.nc`` and ``*.part.nc`` share the folder and the ``.nc``
+    extension, so a glob such as ``up*/*.nc`` finds them) are skipped, each with a logged
+    warning naming it and what it is; a ValueError if no point file is left."""
+    points = []
+    for p in paths:
+        problem = point_file_problem(p)
+        if problem is None:
+            points.append(p)
+        else:
+            log.warning("open_points: skipping %s: %s", p, problem)
+    if not points:
+        raise ValueError(f"open_points: no point file among {len(paths)} path(s)")
+    return _open_many(points, "point", lambda ds: str(ds.encoding.get("source", "")), **kwargs)
