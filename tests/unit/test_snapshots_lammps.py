@@ -152,6 +152,29 @@ def test_lammps_frozen_atoms_are_type_2_and_refused_as_a_sample(sim, tmp_path):
         data_state(tmp_path / "w.data")
 
 
+def test_lammps_title_line_is_short_numbers(tmp_path, capsys):
+    """The title line carries step, time and walls as short plain numbers (no numpy reprs,
+    no float noise such as 7.380000000000001), on one line."""
+    from hugomap.md.lammps_data import checkpoint_to_data, read_data
+
+    ds = xr.Dataset(
+        {"x": (("atom", "xyz"), [[1.0, 0.5, 0.5], [2.0, 1.5, 1.5]]),
+         "v": (("atom", "xyz"), np.zeros((2, 3))), "ids": (("atom",), np.array([0, 1])),
+         "L": (("xyz",), np.array([10.0, 3.0, 3.0])),
+         "walls0": (("wall",), np.array([0.1 + 0.2, -0.5, 10.0, 1.0 / 3.0]))},
+        attrs={"time": 7.38 + 1e-15, "step": 1845},
+    )  # fmt: skip
+    assert repr(ds.attrs["time"]) == "7.380000000000001"
+    title = checkpoint_to_data(ds).splitlines()[0]
+    assert title.endswith(
+        "step 1845 time 7.38 tau, walls at x = 0.3 + -0.5 t and 10 + 0.333333 t"
+    ), title
+    assert "np." not in title and "0000000" not in title
+    path = tmp_path / "t.data"
+    path.write_text(checkpoint_to_data(ds))
+    assert read_data(path).title == title
+
+
 def test_export_refuses_a_foreign_file(tmp_path, capsys):
     xr.Dataset({"a": ("x", [1.0])}).to_netcdf(tmp_path / "f.nc", engine="netcdf4")
     assert main(["export-lammps", str(tmp_path / "f.nc"), str(tmp_path / "f.data")]) == 2

@@ -33,7 +33,7 @@ rigid outflow layer or inflow copy; in LAMMPS, e.g. ``group frozen type 2`` with
 (ids are stable labels, not the storage order); frozen atoms are numbered after the largest
 one. The box spans the periodic lengths in y and z and, along x (bounded by walls in
 hugomap, ``boundary f p p`` in LAMMPS), the walls and every atom. The title line records
-what LAMMPS cannot: step, time and the walls ``x_k0 + v_k t``.
+what LAMMPS cannot: step, time and the walls ``x_k0 + v_k t`` (to 6 significant digits).
 
 Reading (``read_data``) takes the subset of the format such a file uses: an orthogonal box
 (a ``xy xz yz`` tilt line is refused), one atom style (``id type x y z`` with optional image
@@ -261,10 +261,12 @@ def checkpoint_to_data(ds) -> str:
     lo = np.array([min(0.0, *walls, float(xs.min())), 0.0, 0.0])
     hi = np.array([max(float(L[0]), *walls, float(xs.max())), L[1], L[2]])
     kind = "window" if "window_format" in ds.attrs else "state"
+    # the title is for reading: 6 significant digits (the atoms' lines keep 17)
+    t6, (a, va, b, vb) = f"{t:.6g}", (f"{float(c):.6g}" for c in w)
     title = (
         f"LAMMPS data file written by hugomap from an MD {kind} checkpoint (units lj, "
         f"atom_style atomic, boundary f p p; type 2 frozen): step {int(ds.attrs.get('step', 0))}"
-        f" time {t!r} tau, walls at x = {w[0]!r} + {w[1]!r} t and {w[2]!r} + {w[3]!r} t"
+        f" time {t6} tau, walls at x = {a} + {va} t and {b} + {vb} t"
     )
     return format_data(x, v, ds["ids"].values, lo, hi, title)
 
