@@ -44,6 +44,7 @@ import xarray as xr  # noqa: E402
 from hugomap.analysis.stats import linear_hugoniot_fit  # noqa: E402
 from hugomap.campaign import reference_at  # noqa: E402
 from hugomap.failures import FAILURES  # noqa: E402
+from hugomap.figures import SCHEME_COLORS, SCHEME_MARKERS, unit_text  # noqa: E402
 from hugomap.io.dataset import jump_velocity  # noqa: E402
 
 RESULTS = Path(os.environ.get("HUGOMAP_RESULTS", "results"))
@@ -64,8 +65,9 @@ scenes = {name: ds.compute() for name, ds in lazy.items()}  # small: read each f
 
 
 def unit(var: xr.DataArray) -> str:
-    """A variable's unit for a label: its reduced LJ unit (MD) or its SI unit."""
-    return str(var.attrs.get("reduced_units", var.attrs.get("units", "")))
+    """A variable's unit for a label: its reduced LJ unit (MD) or its SI unit, written as the
+    package's figures write units (σ/τ, ε σ⁻³)."""
+    return unit_text(str(var.attrs.get("reduced_units", var.attrs.get("units", ""))))
 
 
 for name, ds in scenes.items():
@@ -114,23 +116,29 @@ fit_table
 
 # %% [markdown]
 # ## D against u_p and P against V, every scheme with the reference
+# Each scheme in the colour and marker of the package's figures (`hugomap.figures`): filled
+# where the point is `ok`, hollow where it is `not_converged`.
 
 # %%
-MARK = {"piston": "o", "amw": "s", "mw": "^", "dichotomy": "D", "reference": "."}
-COLOR = {"piston": "C0", "amw": "C1", "mw": "C2", "dichotomy": "C3"}  # a fit in its points' colour
+MARK = {**SCHEME_MARKERS, "reference": "."}
 for name, ds in scenes.items():
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
     for scheme in ds["scheme"].values:
         p = ds.sel(scheme=scheme)
-        use = np.isin(p["status"].values.astype(str), USABLE)
+        status = p["status"].values.astype(str)
+        use = np.isin(status, USABLE)
         if not use.any():
             continue  # nothing drawn: no legend entry
         u = jump_velocity(p)[0]
-        m, c = MARK.get(str(scheme), "x"), COLOR.get(str(scheme), "C4")
-        ax1.errorbar(u[use], p["D"].values[use], yerr=p["D_err"].values[use], fmt=m,
-                     color=c, label=str(scheme), capsize=2)  # fmt: skip
-        ax2.errorbar(p["V"].values[use], p["P"].values[use], yerr=p["P_err"].values[use],
-                     fmt=m, color=c, label=str(scheme), capsize=2)  # fmt: skip
+        m, c = MARK.get(str(scheme), "x"), SCHEME_COLORS.get(str(scheme), "C4")
+        for which, face, tag in (("ok", c, ""), ("not_converged", "none", ", not converged")):
+            sel = status == which
+            if not sel.any():
+                continue
+            ax1.errorbar(u[sel], p["D"].values[sel], yerr=p["D_err"].values[sel], fmt=m,
+                         color=c, mfc=face, label=f"{scheme}{tag}", capsize=2)  # fmt: skip
+            ax2.errorbar(p["V"].values[sel], p["P"].values[sel], yerr=p["P_err"].values[sel],
+                         fmt=m, color=c, mfc=face, label=f"{scheme}{tag}", capsize=2)  # fmt: skip
         row = fit_table[(fit_table.scene == name) & (fit_table.scheme == str(scheme))]
         if len(row) and np.isfinite(row["s"].iloc[0]):
             # over the u_p the fit was made on
@@ -189,7 +197,8 @@ if len(cost):
     fig, axes = plt.subplots(1, 2, figsize=(9, 4))
     for ax, col in zip(axes, ("P_rel_err", "D_rel_err"), strict=True):
         for scheme, g in cost.groupby("scheme"):
-            ax.loglog(g["cpu_s"], g[col].clip(lower=1e-5), MARK.get(scheme, "x"), label=scheme)
+            ax.loglog(g["cpu_s"], g[col].clip(lower=1e-5), MARK.get(scheme, "x"),
+                      color=SCHEME_COLORS.get(scheme, "C4"), label=scheme)  # fmt: skip
         ax.set_xlabel("CPU per point [s]")
         ax.set_ylabel(f"{col.split('_')[0]}: |x / x_ref(u_p) − 1|")
     axes[0].legend(fontsize=8)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 
 import matplotlib
 
@@ -190,6 +191,32 @@ def window_history_figure(point: str | os.PathLike, out: str | os.PathLike) -> N
     plt.close(fig)
 
 
+_UNIT_SYMBOLS = {"sigma": "σ", "tau": "τ", "epsilon": "ε"}
+_SUPERSCRIPTS = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def unit_text(units: str) -> str:
+    """A unit string of the datasets (``sigma tau^-1``, ``epsilon sigma^-3``, ``m s-1``) as the
+    figures write it: σ, τ, ε for the LJ units, powers as superscripts, and a single factor
+    to the power −1 after a slash (σ/τ, ε/k_B, ε σ⁻³, σ⁻³, m/s). A string that is not a
+    product of powers is returned as it is."""
+    factors = []
+    for word in units.split():
+        m = re.fullmatch(r"([A-Za-z_]*[A-Za-z])\^?(-?\d+)?", word)
+        if m is None:
+            return units
+        factors.append((_UNIT_SYMBOLS.get(m[1], m[1]), int(m[2] or 1)))
+
+    def power(name: str, n: int) -> str:
+        return name if n == 1 else name + str(n).translate(_SUPERSCRIPTS)
+
+    up = [(b, n) for b, n in factors if n > 0]
+    down = [(b, n) for b, n in factors if n < 0]
+    if up and len(down) == 1 and down[0][1] == -1:
+        return " ".join(power(b, n) for b, n in up) + "/" + down[0][0]
+    return " ".join(power(b, n) for b, n in factors) or units
+
+
 #: How a profile field is drawn: (axis label, SI scale, SI unit shown) for SI datasets.
 PROFILE_SI = {"x": (1e10, "Å"), "rho": (1.0, "kg/m³"), "u": (1.0, "m/s"), "P": (1e-9, "GPa"),
               "T": (1.0, "K")}  # fmt: skip
@@ -198,7 +225,9 @@ PROFILE_SI = {"x": (1e10, "Å"), "rho": (1.0, "kg/m³"), "u": (1.0, "m/s"), "P":
 def profile_figure(prof: dict, out: str | os.PathLike) -> None:
     """The front-frame profile of ``stages.profile.front_profile``: density, x velocity,
     P_xx with P_yy and P_zz (their gap: the shear stress a crystal holds, 2τ = P_xx −
-    (P_yy + P_zz)/2), and temperature against the distance from the front (ahead > 0)."""
+    (P_yy + P_zz)/2), and temperature against the distance from the front (ahead > 0).
+    Units as the other figures write them (``unit_text``: σ⁻³, σ/τ, ε σ⁻³, ε/k_B); each y
+    label is the quantity over its unit, the four aligned."""
     si = prof["units"]["x"] == "m"
     units = prof["units"]
 
@@ -207,26 +236,26 @@ def profile_figure(prof: dict, out: str | os.PathLike) -> None:
         if si:
             f, u = PROFILE_SI["P" if k in ("Pyy", "Pzz") else k]
             return v * f, u
-        return v, units[k]
+        return v, unit_text(units[k])
 
     x, xu = scaled("x")
-    fig, axes = plt.subplots(4, 1, figsize=(5.5, 8.0), dpi=110, sharex=True)
+    fig, axes = plt.subplots(4, 1, figsize=(5.5, 8.0), dpi=110, sharex=True, layout="constrained")
     for ax, k, label in ((axes[0], "rho", "density ρ"), (axes[1], "u", "x velocity u"),
                          (axes[3], "T", "temperature T")):  # fmt: skip
         v, u = scaled(k)
         ax.plot(x, v, ".-", ms=3)
-        ax.set_ylabel(f"{label} [{u}]")
+        ax.set_ylabel(f"{label}\n[{u}]")
     for k, style in (("P", ".-"), ("Pyy", "--"), ("Pzz", ":")):
         v, u = scaled(k)
         axes[2].plot(x, v, style, ms=3, label={"P": "P_xx"}.get(k, "P_" + k[1:]))
-    axes[2].set_ylabel(f"stress [{u}]")
+    axes[2].set_ylabel(f"stress\n[{u}]")
     axes[2].legend(fontsize=7)
     for ax in axes:
         ax.axvline(0.0, color="k", lw=0.6)
     axes[-1].set_xlabel(f"x − x_front [{xu}] (ahead of the front > 0)")
     axes[0].set_title(f"{prof['scene']}: {prof['samples']} samples in the front's frame, "
                       f"bins merged by {prof['merge']}", fontsize=9)  # fmt: skip
-    fig.tight_layout()
+    fig.align_ylabels(axes)
     fig.savefig(out)
     plt.close(fig)
 

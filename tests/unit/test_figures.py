@@ -117,3 +117,54 @@ def test_d_up_draws_each_point_at_its_jump_u_p(drawn: dict) -> None:
     assert at["amw (MD)"] == [(0.98,)]
     bars = sorted(x for k, v in at.items() if k.startswith("_") for x in v)
     assert bars == [(0.97, 1.95, 2.9)]
+
+
+@pytest.mark.parametrize(
+    ("units", "text"),
+    [("sigma tau^-1", "σ/τ"), ("epsilon sigma^-3", "ε σ⁻³"), ("sigma^-3", "σ⁻³"),
+     ("sigma^3", "σ³"), ("epsilon k_B^-1", "ε/k_B"), ("tau", "τ"), ("tau^-1", "τ⁻¹"),
+     ("m s-1", "m/s"), ("kg m-3", "kg m⁻³"), ("1", "1"), ("g/mol", "g/mol")],
+)  # fmt: skip
+def test_unit_text(units: str, text: str) -> None:
+    assert figures.unit_text(units) == text
+
+
+def _profile() -> dict:
+    """A front-frame profile as ``stages.profile.front_profile`` gives it (MD units)."""
+    from hugomap.io.dataset import lj_units
+
+    t = lj_units()
+    x = np.linspace(-40.0, 20.0, 60)
+    s = 0.5 * (1.0 - np.tanh(x / 2.0))
+    fields = {"rho": 0.8 + 0.45 * s, "u": 2.0 * s, "P": 0.05 + 19.5 * s, "Pyy": 0.05 + 15 * s,
+              "Pzz": 0.05 + 15.2 * s, "E": -5.0 + 3.0 * s, "T": 1.0 + 4.1 * s}  # fmt: skip
+    units = {"x": t.axes["length"], "u": t.axes["velocity"]}
+    units |= {k: t.point[k][0] for k in fields if k not in units}
+    return {"x": x, **fields, "units": units, "scene": "lj", "t": 100.0, "samples": 10,
+            "merge": 2}  # fmt: skip
+
+
+def test_profile_labels_are_unicode_aligned_and_apart(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The profile's four y labels: units written as the other figures write them, at one
+    x, and no two of them overlapping once drawn."""
+    figs: list = []
+    close = plt.close
+    monkeypatch.setattr(figures.plt, "close", figs.append)
+    figures.profile_figure(_profile(), tmp_path / "profile.png")
+    assert (tmp_path / "profile.png").stat().st_size
+    (fig,) = figs
+    try:
+        labels = [ax.yaxis.label for ax in fig.axes]
+        texts = [lb.get_text() for lb in labels] + [fig.axes[-1].get_xlabel()]
+        for unit in ("[σ⁻³]", "[σ/τ]", "[ε σ⁻³]", "[ε/k_B]", "[σ]"):
+            assert any(unit in t for t in texts), (unit, texts)
+        assert not any(w in t for t in texts for w in ("sigma", "tau", "epsilon", "^")), texts
+        fig.canvas.draw()
+        boxes = [lb.get_window_extent() for lb in labels]
+        assert max(b.x0 for b in boxes) - min(b.x0 for b in boxes) < 1.0  # aligned
+        for i, a in enumerate(boxes):
+            assert not any(a.overlaps(b) for b in boxes[i + 1 :]), texts
+    finally:
+        close(fig)
