@@ -55,6 +55,32 @@ if (
 
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
 from hugomap.config import ConfigError, load_schema, validate_config
+from hugomap.io import sweep_lock
+from snakemake.logging import logger
+
+
+# One sweep at a time in a working directory (the profile turns Snakemake's own lock off, see
+# workflow/profiles/default). The main process of a run that starts jobs takes
+# .snakemake/hugomap.lock, naming itself (host, pid, start), when Snakemake calls onstart: a
+# dry run, --lint, --unlock, "Nothing to be done" and the jobs Snakemake spawns take none. A
+# live owner on this host, or one on another host, refuses the run and names the owner; a
+# dead owner's lock (a sweep killed hard) is taken over. Released on success, on error and
+# at exit (hugomap.io.sweep_lock).
+onstart:
+    if workflow.exec_mode == ExecMode.DEFAULT:
+        try:
+            sweep_lock.acquire(log=logger.warning)
+        except sweep_lock.SweepLocked as exc:
+            raise WorkflowError(str(exc)) from None
+
+
+onsuccess:
+    sweep_lock.release()
+
+
+onerror:
+    sweep_lock.release()
+
 
 # The default sweep, unless a config was given on the command line (--configfile replaces
 # it rather than being merged into it, so a test config runs alone).

@@ -9,7 +9,8 @@ whole process group (Snakemake and every job it runs).
 
 The reruns are the README's command (with ``--workflow-profile workflow/profiles/default``,
 whose settings make Snakemake rerun incomplete jobs); they add no flag.
-Checked: the last run completes; no file finished before a kill is written again (same inode
+Checked: each rerun takes over the sweep lock the killed run left (hugomap.io.sweep_lock),
+and the last run releases it; the last run completes; no file finished before a kill is written again (same inode
 and mtime: loop states, checkpoints, points); the killed piston run resumed from its periodic
 checkpoint (its log names the file and the step it holds); the loop ends, its states
 consistent; every netCDF file opens. "Finished" is Snakemake's own account: the outputs of
@@ -227,6 +228,8 @@ def test_killed_sweep_resumes(tmp_path: Path, sweeps: list[Sweep]) -> None:
     second.wait_for("a piston run with a periodic checkpoint beside a finished point",
                     piston_mid_run)  # fmt: skip
     second.kill()
+    # the first run's sweep lock, left by the kill, was taken over (its owner is gone)
+    assert re.search(rf"taking over the sweep lock .* process {first.proc.pid} ", second.text())
     finished_2 = second.finished_files()
     killed = {p: _step_time(p) for p in parts if p.exists()}
     assert killed
@@ -238,6 +241,8 @@ def test_killed_sweep_resumes(tmp_path: Path, sweeps: list[Sweep]) -> None:
     third = Sweep(tmp_path, cfg, "third")
     sweeps.append(third)
     third.finish()
+    assert re.search(rf"taking over the sweep lock .* process {second.proc.pid} ", third.text())
+    assert not (tmp_path / ".snakemake" / "hugomap.lock").exists()  # released at the end
     _unchanged(finished_1, tmp_path)
     _unchanged(finished_2, tmp_path)
     points = [f for f in {**finished_1, **finished_2} if re.search(r"up[^/]+/\w+\.nc$", f)]
