@@ -54,7 +54,7 @@ if (
     )
 
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
-from hugomap.config import ConfigError, load_schema, validate_config
+from hugomap.config import ConfigError, load_config, load_schema, validate_config
 from hugomap.io import sweep_lock
 from snakemake.logging import logger
 
@@ -83,10 +83,23 @@ onerror:
 
 
 # The default sweep, unless a config was given on the command line (--configfile replaces
-# it rather than being merged into it, so a test config runs alone).
+# it rather than being merged into it, so a test config runs alone). Snakemake's message for
+# a YAML syntax error names neither line nor column: the project's loader reads the file
+# again and gives them. (A --configfile is parsed by Snakemake before it reads this file, so
+# its syntax errors cannot be caught here: `python -m hugomap check-config FILE` or
+# `snakemake --verbose` shows their line and column.)
+# (`workflow.configfile` is what the `configfile:` directive runs; the directive cannot stand
+# in a try block.)
 if not config:
-
-    configfile: str(Path(workflow.basedir) / "config" / "config.yaml")
+    _default_config = Path(workflow.basedir) / "config" / "config.yaml"
+    try:
+        workflow.configfile(str(_default_config))
+    except WorkflowError:
+        try:
+            load_config(_default_config)
+        except ConfigError as exc:
+            raise WorkflowError(str(exc)) from None
+        raise
 
 
 # Refuse a bad config before any job starts (schema ranges, unknown keys, cross-key checks).
