@@ -15,7 +15,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 SWEEP = (
-    "python3 -m venv .venv && .venv/bin/pip install -e '.[test]' && .venv/bin/snakemake "
+    "python3 -m venv .venv && .venv/bin/pip install -e . && .venv/bin/snakemake "
     "--cores 2 --workflow-profile workflow/profiles/default"
 )
 TESTS = "python3 -m venv .venv && .venv/bin/pip install -e '.[test]' && .venv/bin/python -m pytest"
