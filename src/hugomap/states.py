@@ -85,7 +85,8 @@ class PistonFrame:
     ``shock.avg_length``) in these units where the scene gives them in others (LAMMPS units
     metal: the scene in Å, the frame in m); None: the scene's. ``piston_gap``: how far the
     slab behind the front keeps from the piston (``shock.piston_gap``, clear of the layers
-    the piston's start shocked); None: ``gap``."""
+    the piston's start shocked); None: ``gap``. ``ahead_gap``: how far the slab ahead keeps
+    from the front (``shock.ahead_gap``); None: ``gap``."""
 
     u_behind: float
     u_ahead: float
@@ -98,6 +99,7 @@ class PistonFrame:
     gap: float | None = None
     avg_length: float | None = None
     piston_gap: float | None = None
+    ahead_gap: float | None = None
 
 
 @dataclass(frozen=True)
@@ -111,7 +113,8 @@ class ControlParams:
     front's place in the window, ω*); ``outflow_gap``: the measured slab behind the front
     stays this far from the outflow edge; ``gap`` and ``avg_length``: the measured slabs'
     distance from the front and their length (``shock.gap``, ``shock.avg_length``), in the
-    window's length unit, as ``PistonFrame`` carries them for a piston run;
+    window's length unit, as ``PistonFrame`` carries them for a piston run; ``ahead_gap``:
+    the slab ahead's distance from the front (``shock.ahead_gap``; None: ``gap``);
     ``max_average_time``: how long a steady average (AMW/MW's, the dichotomy's final one)
     may go on while its point is unresolved (``window.steady.steady_state``)."""
 
@@ -132,11 +135,12 @@ class ControlParams:
     gap: float
     avg_length: float
     max_average_time: float = 0.0
+    ahead_gap: float | None = None
 
     @classmethod
     def from_window(
         cls, w: dict, length: float, gap: float, avg_length: float,
-        times: tuple[float, float] | None = None,
+        times: tuple[float, float] | None = None, ahead_gap: float | None = None,
     ) -> ControlParams:  # fmt: skip
         """From a validated ``window`` block: ``times`` (window_time, average_time) where the
         backend derives them, else the configured ones; the dichotomy's trial as long as one
@@ -155,7 +159,7 @@ class ControlParams:
             gain_rate=float(w["mw"]["gain_rate"]),
             gain_position=float(w["mw"]["gain_position"]) / wt, target=w["front_fraction"],
             outflow_gap=w.get("outflow_gap") or gap, gap=gap, avg_length=avg_length,
-            max_average_time=float(w.get("max_average_time") or 0.0),
+            max_average_time=float(w.get("max_average_time") or 0.0), ahead_gap=ahead_gap,
         )  # fmt: skip
 
 

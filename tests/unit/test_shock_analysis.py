@@ -183,6 +183,30 @@ def test_a_point_is_not_ok_without_a_measured_state_ahead():
     assert r["diagnostic"].startswith("no state ahead measured"), r["diagnostic"]
 
 
+def test_a_relaxation_zone_is_cleared_behind_and_the_state_ahead_read_close_to_the_front():
+    """The toy run's exact jump with a relaxation zone: the 15 bins behind the front 5 % of
+    the energy jump too warm (a crystal's plastic wave still relaxing there). With gap 3 the
+    slab reads the zone and the point is not ok; with gap 18 it is cleared, but a window
+    with 30 bins ahead of the front then has no slab ahead (2 gap + 3 bins > 30) and is not
+    ok either; with ``ahead_gap`` 3 the state ahead is read again and the point is ok."""
+    from hugomap.analysis.shock import measure_point
+
+    h, pole = _toy_run(0.0, 0.0005)
+    jump = _behind(1.0, 1.0, 0.0, 0.0, 3.0, 1.0)[2]
+    x = np.arange(1, 101)[None, :]
+    zone = (x <= h["front"][:, None]) & (x > h["front"][:, None] - 15)
+    h["sums"][..., 4] += 0.05 * jump * zone
+    h["x_right"] = h["front"] + 30.0
+    kw = dict(avg_length=20.0, residual_tol=0.01)
+    near = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, **kw)
+    assert near["status"] == "not_converged" and near["residual_energy"] > 0.01
+    far = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=18.0, **kw)
+    assert np.isnan(far["ahead_P"]) and far["status"] == "not_converged"
+    both = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=18.0, ahead_gap=3.0, **kw)
+    assert both["status"] == "ok", both["diagnostic"]
+    assert abs(both["residual_energy"]) < 0.002 and both["ahead_P"] == pytest.approx(1.0, rel=1e-3)
+
+
 def test_front_speed_error_covers_a_slow_wander():
     """A front that wanders by A = 0.5 (one sine over the run, T = 20: an acoustic wave
     ringing longer than the average) moves a least-squares D by 6A/(πT) = 0.048 (the

@@ -256,7 +256,7 @@ TWO_WAVE_FRACTION = 0.03  # …and this fraction of the main jump P − P0
 
 def _slabs(
     h: dict[str, np.ndarray], profile: Profile, gap: float, avg_length: float,
-    left_gap: float | None,
+    left_gap: float | None, ahead_gap: float | None = None,
 ) -> tuple[list[SlabState | None], list[SlabState | None], dict[str, list]]:  # fmt: skip
     """Per sample, the slab state behind and ahead of the front and their (far, near) half
     slabs (``measure_point`` gives the slabs' bounds); None where a slab is too narrow."""
@@ -267,6 +267,7 @@ def _slabs(
     edges = bin_edges(profile, sums.shape[1] if sums.ndim == 3 else 0)
     min_len = MIN_SLAB_BINS * profile.bin_width - 1e-9 * profile.bin_width
     lg = gap if left_gap is None else left_gap
+    ag = gap if ahead_gap is None else ahead_gap
     behind: list[SlabState | None] = []
     ahead: list[SlabState | None] = []
     halves: dict[str, list] = {"behind": [], "ahead": []}  # (far, near) half-slab states
@@ -277,7 +278,7 @@ def _slabs(
             if hi - lo >= min_len:
                 st = slab_state(profile, sums[i], edges, lo, hi)
                 hb = slab_halves(profile, sums[i], edges, lo, hi)
-            a_lo, a_hi = xf[i] + gap, min(xr[i] - gap, xf[i] + gap + avg_length)
+            a_lo, a_hi = xf[i] + ag, min(xr[i] - ag, xf[i] + ag + avg_length)
             if a_hi - a_lo >= min_len:
                 sa = slab_state(profile, sums[i], edges, a_lo, a_hi)
                 ha = slab_halves(profile, sums[i], edges, a_lo, a_hi)
@@ -319,6 +320,7 @@ def measure_point(
     n_blocks: int = N_BLOCKS,
     track: tuple[np.ndarray, np.ndarray] | None = None,
     u_p_from: str = "boundary",
+    ahead_gap: float | None = None,
 ) -> dict[str, float | str | bool]:
     """One Hugoniot point from the samples of a run (module docstring).
 
@@ -326,9 +328,10 @@ def measure_point(
     behind and ahead) and the raw profile sums (nsamples, nbins, nfields) read by ``profile``.
     For each sample the slab behind the front is [max(x_left + left_gap, x_f − gap −
     avg_length), x_f − gap] (``left_gap`` defaults to ``gap``: the most recently shocked
-    material, clear of the piston or the outflow edge) and the slab ahead [x_f + gap,
-    min(x_right − gap, x_f + gap + avg_length)]; a slab narrower than ``MIN_SLAB_BINS`` bins
-    is skipped in that sample. Then
+    material, clear of the piston or the outflow edge) and the slab ahead [x_f + g_a,
+    min(x_right − g_a, x_f + g_a + avg_length)], g_a = ``ahead_gap`` (default ``gap``: a
+    relaxation zone lies behind a front, not ahead of it); a slab narrower than
+    ``MIN_SLAB_BINS`` bins is skipped in that sample. Then
       D = D_w − u_ahead, D_w the front speed: the Theil–Sen slope of x_f(t) over ``track``
         (times, fronts; default the samples': a piston passes its whole steady run, loading
         included, since the front wanders by a few tenths of σ over several τ in a small
@@ -392,7 +395,7 @@ def measure_point(
     t = np.asarray(h["t"], dtype=float)
     xf = np.asarray(h["front"], dtype=float)
     n = t.size
-    behind, ahead, halves = _slabs(h, profile, gap, avg_length, left_gap)
+    behind, ahead, halves = _slabs(h, profile, gap, avg_length, left_gap, ahead_gap)
     # no slab in any sample: the fields every point has, NaN (status too_few_samples)
     keys = next((list(s) for s in behind + ahead if s is not None),
                 ["rho", "u", "P", "E", "Pyy", "Pzz", "T"])  # fmt: skip

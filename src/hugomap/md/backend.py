@@ -242,6 +242,7 @@ class MDBackend:
             load_distance=sh["load_fraction"] * float(solver.state.L[0]),
             rear_margin=sh["rear_margin"], max_time=sh["max_time"],
             sample_every=sh["sample_every"], piston_gap=sh["piston_gap"],
+            ahead_gap=sh.get("ahead_gap"),
         )  # fmt: skip
 
     def profile(self, solver, scene: dict, info: dict | None = None) -> MDProfile:
@@ -314,7 +315,7 @@ class MDBackend:
         """The configured times (``ControlParams.from_window``)."""
         sh = scene["shock"]
         return ControlParams.from_window(scene["window"], window.geom.length, sh["gap"],
-                                         sh["avg_length"])  # fmt: skip
+                                         sh["avg_length"], ahead_gap=sh.get("ahead_gap"))  # fmt: skip
 
     #: The reference is computed at the pole the prepared sample measured (``reference``).
     reference_from_sample = True

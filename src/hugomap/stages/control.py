@@ -50,7 +50,8 @@ def control_point(
         if res.converged:
             values, h = steady_state(win, profile, pole, sig, cp.average_time, cp.every,
                                      cp.gap, cp.avg_length, sh["residual_tol"],
-                                     cp.outflow_gap, cp.max_average_time)  # fmt: skip
+                                     cp.outflow_gap, cp.max_average_time,
+                                     ahead_gap=cp.ahead_gap)  # fmt: skip
             status, diagnostic = str(values.pop("status")), str(values.pop("diagnostic"))
             log.info("%s: D = %.6g +- %.2g, u_p = %.6g, P = %.6g, %s", scheme, values["D"],
                      values["D_err"], values["u_p_set"], values["P"], status)  # fmt: skip

@@ -116,7 +116,7 @@ def dichotomy_point(
     try:
         values, h = steady_state(win, profile, pole, sig, cp.final_time, cp.every, cp.gap,
                                  cp.avg_length, sh["residual_tol"], cp.outflow_gap,
-                                 cp.max_average_time)  # fmt: skip
+                                 cp.max_average_time, ahead_gap=cp.ahead_gap)  # fmt: skip
         status, diagnostic = str(values.pop("status")), str(values.pop("diagnostic"))
         log.info("dichotomy: D = %.6g +- %.2g, P = %.6g, %s", values["D"], values["D_err"],
                  values["P"], status)  # fmt: skip

@@ -240,6 +240,7 @@ def piston_point(
             sh["residual_tol"],
             left_gap=frame.piston_gap,
             track=steady_track(a, frame),
+            ahead_gap=frame.ahead_gap,
         )  # fmt: skip
         r.pop("u_p"), r.pop("u_p_err")  # u_p is exact: the dataset's coordinate
         status, diagnostic = str(r.pop("status")), str(r.pop("diagnostic"))

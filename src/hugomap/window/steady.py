@@ -44,10 +44,13 @@ def steady_state(
     residual_tol: float,
     left_gap: float | None = None,
     max_duration: float | None = None,
+    ahead_gap: float | None = None,
 ) -> tuple[dict, dict[str, np.ndarray]]:
     """Average the steady wave for ``duration`` (module docstring); returns the point's
     values and the samples (t, front, x_left, x_right, sums, stage, omega, and the slab
-    behind's u relative to the upstream and P_xx: u_slab, P_slab).
+    behind's u relative to the upstream and P_xx: u_slab, P_slab). The slabs are
+    ``analysis.shock.measure_point``'s (``gap``, ``avg_length``, ``left_gap`` from the
+    outflow edge, ``ahead_gap`` ahead of the front).
 
     With ``max_duration`` > ``duration`` the average goes on, ``duration`` at a time and
     measured again over every sample, while the point is ``unresolved`` (a residual's error
@@ -79,7 +82,7 @@ def steady_state(
             front.append(track_front(profile, sums, g.x_lo, g.x_hi, win.u_out, win.u_in))
             sums_all.append(sums)
         r, h = _measure(win, profile, pole, signal, t, front, sums_all, omega, gap, avg_length,
-                        residual_tol, left_gap)  # fmt: skip
+                        residual_tol, left_gap, ahead_gap)  # fmt: skip
         if len(t) >= n_max or not unresolved(r, residual_tol):
             break
     r["average_time"] = float(len(t) * step)
@@ -89,7 +92,7 @@ def steady_state(
 def _measure(
     win: WindowSolver, profile: Profile, pole: Pole, signal: OmegaSignal, t: list, front: list,
     sums_all: list, omega: list, gap: float, avg_length: float, residual_tol: float,
-    left_gap: float | None,
+    left_gap: float | None, ahead_gap: float | None = None,
 ) -> tuple[dict, dict[str, np.ndarray]]:  # fmt: skip
     """The point from the samples so far (``steady_state``)."""
     g = win.geom
@@ -110,7 +113,7 @@ def _measure(
     r = measure_point(
         h, profile, pole, u_behind=win.u_out, u_ahead=win.u_in, gap=gap,
         avg_length=avg_length, residual_tol=residual_tol, left_gap=left_gap,
-        front_speed=(L * a, L * se), u_p_from="slab",
+        front_speed=(L * a, L * se), u_p_from="slab", ahead_gap=ahead_gap,
     )  # fmt: skip
     r["omega_drift"], r["omega_drift_err"] = L * a, L * se
     # the slab's velocity (relative to the upstream) and P_xx per sample: their block
