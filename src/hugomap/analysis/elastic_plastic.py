@@ -32,6 +32,7 @@ from ..eos import EOS
 from ..eos.mie_gruneisen import pressure
 from ..strength import Strength
 from ..strength.von_mises import hel
+from .linear_hugoniot import shock_velocity
 
 
 def two_wave_state(u_p: float, eos: EOS, strength: Strength) -> dict[str, float]:
@@ -68,7 +69,8 @@ def two_wave_state(u_p: float, eos: EOS, strength: Strength) -> dict[str, float]
 
     # f > 0 for a wave too slow (too much compression for its stress), < 0 too fast: bisect
     # between just above u_p and well above the hydrodynamic speed.
-    lo, hi = u_p + 1e-6 * (c0 + u_p), 2.0 * (c0 + s * u_p) + c_l
+    d_hydro = shock_velocity(u_p, c0, s)
+    lo, hi = u_p + 1e-6 * (c0 + u_p), 2.0 * d_hydro + c_l
     if not (f(lo) > 0.0 > f(hi)):
         raise ValueError(f"no plastic wave speed found in ({lo:.4g}, {hi:.4g}) m/s")
     for _ in range(200):
@@ -82,4 +84,4 @@ def two_wave_state(u_p: float, eos: EOS, strength: Strength) -> dict[str, float]
     d = 0.5 * (lo + hi)
     rho, sx, e = state(d)
     return {"D_plastic": d, "sigma_x": sx, "rho": rho, "e": e, "c_L": c_l,
-            "sigma_HEL": s_hel, "u_HEL": u_hel, "D_hydro": c0 + s * u_p}  # fmt: skip
+            "sigma_HEL": s_hel, "u_HEL": u_hel, "D_hydro": d_hydro}  # fmt: skip

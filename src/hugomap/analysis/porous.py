@@ -6,8 +6,8 @@ Solid: Mie–Grüneisen EOS referenced to the linear Us–up Hugoniot D = c0 + s
     P(V, E) = P_H(V) + (Γ/V)·(E − E_H(V)),
     P_H(V) = ρ0 c0² η / (1 − s η)²,   η = 1 − V/V0,   E_H(V) = ½ P_H(V) (V0 − V),
 
-(the Hugoniot from the jump conditions with u_p = η D; E measured from the ambient state at
-V0, P = 0). Copper: ρ0 = 8930 kg/m³, c0 = 3940 m/s, s = 1.49, Γ0 = 2.0 (LASL Shock Hugoniot
+(the Hugoniot from the jump conditions with u_p = η D, ``linear_hugoniot``; E measured from
+the ambient state at V0, P = 0). Copper: ρ0 = 8930 kg/m³, c0 = 3940 m/s, s = 1.49, Γ0 = 2.0 (LASL Shock Hugoniot
 Data, S. P. Marsh ed., University of California Press, 1980; the values of the project's issue).
 
 Porous sample: initial specific volume V00 = α·V0 (distention α = ρ0/ρ00 ≥ 1), at P ≈ 0 and
@@ -59,6 +59,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from .linear_hugoniot import compression_state, jump_state
 
 
 @dataclass(frozen=True)
@@ -128,7 +130,7 @@ def solid_hugoniot_pressure(V: np.ndarray | float, solid: MGSolid = COPPER) -> n
             f"V must exceed V0·(1 − 1/s) = {solid.V0 * (1 - 1 / solid.s):.6g} m³/kg, where the "
             "linear Us–up Hugoniot's pressure diverges"
         )
-    return solid.rho0 * solid.c0**2 * eta / (1.0 - solid.s * eta) ** 2
+    return compression_state(eta, solid.rho0, solid.c0, solid.s)[0]
 
 
 def _eta_max(alpha: float, solid: MGSolid) -> float:
@@ -145,7 +147,7 @@ def _pressure_eta(eta: np.ndarray, alpha: float, solid: MGSolid) -> np.ndarray:
     Working in η keeps full relative precision for weak shocks, where V is within 1e-5 of V0
     and P = ρ0c0²η would lose most of its digits if η were formed as 1 − V/V0 from a root in V."""
     half_g = 0.5 * solid.gamma0
-    P_H = solid.rho0 * solid.c0**2 * eta / (1.0 - solid.s * eta) ** 2
+    P_H = compression_state(eta, solid.rho0, solid.c0, solid.s)[0]
     return P_H * ((1.0 - half_g * eta) / (1.0 - half_g * (alpha - 1.0 + eta)))  # α = 1: P_H·1
 
 
@@ -249,16 +251,16 @@ def porous_hugoniot_from_up(
 
 def solid_hugoniot_from_up(u_p: np.ndarray | float, solid: MGSolid = COPPER) -> HugoniotState:
     """Closed-form solid Hugoniot at u_p [m/s]: D = c0 + s u_p, P = ρ0 D u_p,
-    V = V0 (1 − u_p/D), E = ½ u_p²."""
+    V = V0 (1 − u_p/D), E = ½ u_p² (``linear_hugoniot.jump_state``, pole at rest, P = 0)."""
     u = np.asarray(u_p, dtype=np.float64)
-    D = solid.c0 + solid.s * u
+    D, rho, V, P, E = jump_state(u, solid.rho0, solid.c0, solid.s)
     return HugoniotState(
         u_p=u,
         D=D,
-        P=solid.rho0 * D * u,
-        V=solid.V0 * (1.0 - u / D),
-        rho=solid.rho0 * D / (D - u),
-        E=0.5 * u * u,
+        P=P,
+        V=V,
+        rho=rho,
+        E=E,
         alpha=1.0,
         rho00=solid.rho0,
         eta=u / D,

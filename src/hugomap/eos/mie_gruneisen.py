@@ -1,7 +1,8 @@
 """Mie–Grüneisen equation of state referenced to the linear Us–up Hugoniot (SI units).
 
 Reference curve (the principal Hugoniot of a linear Us = c0 + s·up material, pole ρ0, P = 0,
-e = 0), with the compression η = 1 − ρ0/ρ:
+e = 0), with the compression η = 1 − ρ0/ρ (``analysis.linear_hugoniot.compression_state``,
+compiled here for the kernels):
 
     P_H(η) = ρ0 c0² η / (1 − s η)²            [Pa]
     E_H(η) = P_H η / (2 ρ0)                   [J/kg]   (Rankine–Hugoniot energy, ½ P (V0 − V))
@@ -35,6 +36,7 @@ import math
 
 import numpy as np
 
+from ..analysis import linear_hugoniot
 from ..numba_conf import njit
 
 ETA_MAX_FRACTION = 0.9
@@ -44,6 +46,9 @@ C2_FLOOR = 0.01
 COPPER = np.array([8930.0, 3940.0, 1.49, 2.0])
 COPPER_SOURCE = "LASL Shock Hugoniot Data (Marsh 1980): rho0=8930, c0=3940 m/s, s=1.49, G0=2.0"
 
+#: ``linear_hugoniot.compression_state`` compiled for the kernels: (P_H, E_H) at η
+_hugoniot_at_compression = njit(linear_hugoniot.compression_state)
+
 
 @njit
 def reference_curve(eta: float, rho0: float, c0: float, s: float) -> tuple[float, float, float]:
@@ -52,12 +57,10 @@ def reference_curve(eta: float, rho0: float, c0: float, s: float) -> tuple[float
     if eta >= 0.0:
         eta = min(eta, ETA_MAX_FRACTION / s)
         d = 1.0 - s * eta
-        p = k0 * eta / (d * d)
-        dp = k0 * (1.0 + s * eta) / (d * d * d)
-    else:
-        p = k0 * eta
-        dp = k0
-    return p, p * eta / (2.0 * rho0), dp
+        p, e = _hugoniot_at_compression(eta, rho0, c0, s)
+        return p, e, k0 * (1.0 + s * eta) / (d * d * d)
+    p = k0 * eta
+    return p, p * eta / (2.0 * rho0), k0
 
 
 @njit
@@ -89,7 +92,8 @@ def pressure_sound_speed(rho: float, e: float, params: np.ndarray) -> tuple[floa
 
 def hugoniot_state(up: float, params: np.ndarray) -> dict[str, float]:
     """The shocked state on the linear Hugoniot for particle velocity ``up`` [m/s] (pole at rest,
-    P = 0, e = 0): Us = c0 + s up, ρ = ρ0 Us/(Us − up), P = ρ0 Us up, e = ½ up² (SI)."""
+    P = 0, e = 0): Us = c0 + s up, ρ = ρ0 Us/(Us − up), P = ρ0 Us up, e = ½ up² (SI;
+    ``analysis.linear_hugoniot.jump_state``)."""
     rho0, c0, s = float(params[0]), float(params[1]), float(params[2])
-    us = c0 + s * up
-    return {"Us": us, "rho": rho0 * us / (us - up), "P": rho0 * us * up, "e": 0.5 * up * up}
+    us, rho, _, p, e = linear_hugoniot.jump_state(up, rho0, c0, s)
+    return {"Us": us, "rho": rho, "P": p, "e": e}

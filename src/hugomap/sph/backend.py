@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ..analysis.linear_hugoniot import shock_velocity
 from ..eos import EOS
 from ..failures import StageFailed
 from ..io.dataset import si_units
@@ -292,7 +293,7 @@ class CSPHBackend:
         """Times default to the window's sound crossing: window_time = L/(c0 + s u_p),
         average_time = 2 window_time (``ControlParams.from_window`` for the rest)."""
         w, e = scene["window"], scene["material"]["eos"]
-        wt = w.get("window_time") or w["length"] / (e["c0"] + e["s"] * u_p)
+        wt = w.get("window_time") or w["length"] / shock_velocity(u_p, e["c0"], e["s"])
         avg = w.get("average_time") or 2.0 * wt
         sh = scene["shock"]
         return ControlParams.from_window(w, window.geom.length, sh["gap"], sh["avg_length"],
@@ -403,11 +404,11 @@ class CSPHBackend:
         over the fastest signal (c0 + s u_p)."""
         s, e, sh = scene["sample"], scene["material"]["eos"], scene["shock"]
         u_lo, u_hi = min(sh["u_p"]), max(sh["u_p"])
-        d_min = e["c0"] + e["s"] * u_lo
+        d_min = shock_velocity(u_lo, e["c0"], e["s"])
         if "porous" in s:
             a = s["porous"]["distention"]
             d_min = min(d_min, u_lo * a / max(a - 1.0, 1e-9))
-        dt = scene["numerics"]["cfl"] * s["dx"] / (e["c0"] + e["s"] * u_hi)
+        dt = scene["numerics"]["cfl"] * s["dx"] / shock_velocity(u_hi, e["c0"], e["s"])
         return s["length"] / d_min / dt
 
     def cost(self, scene: dict, stage: str) -> Resources:

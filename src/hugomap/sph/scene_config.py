@@ -8,6 +8,7 @@ workflow, so this module stays light: no numba, no xarray.
 
 from __future__ import annotations
 
+from ..analysis.linear_hugoniot import shock_velocity
 from ..keys import show, window_ahead_room
 
 #: Smallest pore radius in lattice spacings (``hugomap.sph.sample.K_RESOLUTION``).
@@ -46,7 +47,7 @@ def slowest_front(scene: dict, u_p: float) -> float:
     (McQueen's limit; a compaction left incomplete runs faster, so room is not
     overestimated)."""
     eos = scene["material"]["eos"]
-    D = eos["c0"] + eos["s"] * u_p
+    D = shock_velocity(u_p, eos["c0"], eos["s"])
     por = scene["sample"].get("porous") if scene["dim"] == 2 else None
     if por is not None and por["distention"] > 1.0:
         a = por["distention"]

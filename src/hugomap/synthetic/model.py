@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..analysis.linear_hugoniot import jump_state
 from ..io.atomic import write_netcdf
 from ..io.checkpoint import CheckpointKind, seal_checkpoint, verify_checkpoint
 from ..window.synthetic import SyntheticFront
@@ -37,11 +38,10 @@ FIELDS = ("count", "mass", "momentum", "energy", "pressure_volume", "volume")
 def shocked_state(rho0: float, P0: float, E0: float, c0: float, s: float, u_p: float):
     """(D, ρ1, P1, E1) behind a steady shock of amplitude u_p: D = c0 + s u_p,
     ρ1 = ρ0 D/(D − u_p), P1 = P0 + ρ0 D u_p, E1 = E0 + ½ (P1 + P0)(1/ρ0 − 1/ρ1)
-    (Zel'dovich & Raizer, ch. I §17)."""
-    D = c0 + s * u_p
-    rho1 = rho0 * D / (D - u_p)
-    P1 = P0 + rho0 * D * u_p
-    return D, rho1, P1, E0 + 0.5 * (P1 + P0) * (1.0 / rho0 - 1.0 / rho1)
+    (Zel'dovich & Raizer, ch. I §17; ``analysis.linear_hugoniot.jump_state``). Units: the
+    scene's, consistent; u_p may be an array."""
+    D, rho1, _, P1, E1 = jump_state(u_p, rho0, c0, s, P0, E0)
+    return D, rho1, P1, E1
 
 
 def _bin_sums(x0: float, width: float, nbins: int, regions, area: float, m: float) -> np.ndarray:

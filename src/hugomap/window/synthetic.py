@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..analysis.linear_hugoniot import shock_velocity
+
 
 @dataclass
 class SyntheticGeometry:
@@ -95,7 +97,7 @@ class SyntheticFront:
 
     def front_velocity(self) -> float:
         """dx_f/dt in the window frame now (module docstring)."""
-        return self.u_in + self.c0 + self.s * self._u_p_eff(self.time)
+        return self.u_in + shock_velocity(self._u_p_eff(self.time), self.c0, self.s)
 
     def advance(self, n_steps: int) -> None:
         for _ in range(n_steps):
