@@ -130,7 +130,8 @@ def named_causes(
         if worst[0] > residual_tol:
             out.append(f"{what}: {how} {worst[0]:.2%} of the jump in {worst[1]} beyond their "
                        "noise (a relaxation zone, a broad front's tail, a state still "
-                       "changing): measure further behind the front or later")  # fmt: skip
+                       "changing): measure further behind the front (raise shock.gap past "
+                       "the relaxation zone, with window.length to hold it) or later")  # fmt: skip
     r, e = values.get("residual_flow", np.nan), values.get("residual_flow_err", np.nan)
     if flow_closes and np.isfinite(r) and not closes(r, e, residual_tol):
         out.append(
