@@ -42,7 +42,9 @@ class ShockFrameResult:
 
 
 class Backend(Protocol):
-    """What the stages need of a solver (module docstring)."""
+    """What the stages need of a solver (module docstring). Every member is required but
+    those in ``OPTIONAL_MEMBERS``; ``tests/unit/test_backend_protocol.py`` checks each
+    registered backend against this class (members, signatures)."""
 
     name: str
     units: UnitTable
@@ -136,3 +138,8 @@ class Backend(Protocol):
         method (``scheme``: msst, nphug) on a homogeneous periodic box of the material at
         the sample's ``pole``, held on that pole's Hugoniot by the solver
         (``lammps.shockframe``)."""
+
+
+#: ``Backend`` members a backend may lack: the stage that needs one asks for it with
+#: ``getattr`` and writes its point with a diagnostic when it is missing.
+OPTIONAL_MEMBERS: frozenset[str] = frozenset({"shock_frame_point"})
