@@ -7,6 +7,7 @@ of ``key=value`` pairs, then one line per particle::
     Lattice="Lx 0 0 0 Ly 0 0 0 Lz" Origin="x0 y0 z0" pbc="F T T"
     Properties=species:S:1:pos:R:3:velo:R:3:masses:R:1:momenta:R:3:<field>:R:1:...
     Time=<t> length_unit=<unit> time_unit=<unit> units="pos:<unit> velo:<unit> ..."
+    velocity_frame=<lab|piston|window> frame_velocity=<v> [x_lo=<x> x_hi=<x>]
 
 A trajectory is frames written back to back (ASE: ``ase.io.read(path, index=":")``; OVITO
 detects the frames itself).
@@ -30,6 +31,17 @@ corner (OVITO's cell origin; ASE keeps it in ``atoms.info``), ``pbc`` the period
 readers do not convert, so a reader that assumes Å is told here what it gets. Reals are
 written with 17 significant digits, so float64 values read back exactly. Writes are atomic
 (temporary file + rename).
+
+The velocities' frame (``VelocityFrame``, when the backend gives one): ``velocity_frame``
+names it (``lab``: the upstream material at rest; ``piston``: the piston at rest, the
+upstream material moving at −u_p; ``window``: a moving window's, the upstream material
+flowing in at u_in < 0); ``frame_velocity`` is the x velocity that takes a velocity to the
+frame of the material at rest ahead of the front, v_x + frame_velocity (lab: 0; piston:
+u_p; window: −u_in), in the ``velo`` column's unit; a window adds its edges ``x_lo`` and
+``x_hi`` (the part of the cell that is the window: behind x_lo the frozen outflow layer,
+beyond x_hi the inflow not yet released; the cell spans them and the walls), in the
+``pos`` unit. ``units`` lists these keys' units after the columns'. Scalars, so ASE reads
+them into ``atoms.info`` and OVITO into global attributes.
 """
 
 from __future__ import annotations
@@ -40,6 +52,7 @@ import os
 import re
 import tempfile
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -52,11 +65,55 @@ _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _SPECIES = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 _UNIT = re.compile(r"^[A-Za-z0-9_/^*.\-]+$")
 _COLUMNS = ("species", "pos", "velo", "masses", "momenta")
-_HEADER = ("Lattice", "Origin", "pbc", "Properties", "Time", "length_unit", "time_unit", "units")
+_HEADER = ("Lattice", "Origin", "pbc", "Properties", "Time", "length_unit", "time_unit", "units",
+           "velocity_frame", "frame_velocity", "x_lo", "x_hi")  # fmt: skip
+#: the frames ``VelocityFrame.name`` may name (module docstring)
+FRAMES = ("lab", "piston", "window")
 
 
 class SnapshotError(ValueError):
     """Bad snapshot input (shapes, names, units); the message names the argument."""
+
+
+@dataclass(frozen=True)
+class VelocityFrame:
+    """The frame a snapshot's velocities are in (module docstring): ``name`` one of
+    ``FRAMES``; ``velocity`` the x velocity that takes them to the frame of the material at
+    rest ahead of the front (v_x + velocity), in the snapshot's velocity unit; a window's
+    edges ``x_lo`` < ``x_hi`` in its length unit (None for a piston run)."""
+
+    name: str
+    velocity: float
+    x_lo: float | None = None
+    x_hi: float | None = None
+
+    def scaled(self, length: float, velocity: float) -> VelocityFrame:
+        """The frame in other units: edges times ``length``, velocity times ``velocity``
+        (the factors from the given units to the snapshot's)."""
+        lo, hi = (None if x is None else x * length for x in (self.x_lo, self.x_hi))
+        return VelocityFrame(self.name, self.velocity * velocity, lo, hi)
+
+    def keys(self, length_unit: str, velocity_unit: str) -> tuple[dict[str, str], dict[str, str]]:
+        """(comment-line pairs, their units) of the frame; ``SnapshotError`` if it is not
+        one of ``FRAMES``, its velocity is not finite, a window lacks an edge or another
+        frame has one, or the edges are not finite with x_lo < x_hi."""
+        if self.name not in FRAMES:
+            raise SnapshotError(f"velocity frame {self.name!r}: one of {list(FRAMES)}")
+        if not math.isfinite(self.velocity):
+            raise SnapshotError(f"frame velocity = {self.velocity!r} must be finite")
+        pairs = {"velocity_frame": self.name, "frame_velocity": repr(float(self.velocity))}
+        units = {"frame_velocity": velocity_unit}
+        lo, hi = self.x_lo, self.x_hi
+        if ((lo, hi) != (None, None)) != (self.name == "window"):
+            raise SnapshotError(f"{self.name} frame with edges {lo!r}, {hi!r}: a window has both, "
+                                "no other frame has any")  # fmt: skip
+        if (lo, hi) != (None, None):
+            ok = lo is not None and hi is not None and math.isfinite(lo) and math.isfinite(hi)
+            if not (ok and hi > lo):
+                raise SnapshotError(f"window edges x_lo = {lo!r}, x_hi = {hi!r}: finite, lo < hi")
+            pairs.update(x_lo=repr(float(lo)), x_hi=repr(float(hi)))
+            units.update(x_lo=length_unit, x_hi=length_unit)
+        return pairs, units
 
 
 def _value(key: str, value: object) -> str:
@@ -120,6 +177,7 @@ def format_frame(
     time_unit: str = "fs",
     units: Mapping[str, str] | None = None,
     info: Mapping[str, object] | None = None,
+    frame: VelocityFrame | None = None,
 ) -> str:
     """One frame as text (module docstring), every number as given: convert beforehand.
 
@@ -129,7 +187,8 @@ def format_frame(
     fields: name → (n,) or (n, k) array (float → R, integer → I, bool → L); species: one
     symbol for all or one per particle; pbc: three flags; time in ``time_unit``; units:
     column → unit for the ``units`` key (pos and velo get theirs from the length and time
-    units unless given); info: more comment-line pairs (str, int, float, bool).
+    units unless given); info: more comment-line pairs (str, int, float, bool); frame:
+    the velocities' frame (``VelocityFrame``, in ``length_unit`` and its velocity unit).
     """
     pos = _vectors("positions", positions, np.shape(positions)[0])
     n = pos.shape[0]
@@ -179,6 +238,10 @@ def format_frame(
         if not _UNIT.match(unit):
             raise SnapshotError(f"units[{name!r}] = {unit!r}: use a compact token such as Pa, m/s")
         unit_map[name] = unit
+    frame_pairs: dict[str, str] = {}
+    if frame is not None:
+        frame_pairs, frame_units = frame.keys(length_unit, vunit)
+        unit_map.update(frame_units)
     header = {
         "Lattice": '"' + " ".join(f"{v:.17g}" for v in np.diag(cell).ravel()) + '"',
         "Origin": '"' + " ".join(f"{v:.17g}" for v in org) + '"',
@@ -188,6 +251,7 @@ def format_frame(
         "length_unit": length_unit,
         "time_unit": time_unit,
         "units": '"' + " ".join(f"{k}:{v}" for k, v in unit_map.items()) + '"',
+        **frame_pairs,
     }
     for key, value in (info or {}).items():
         if not _NAME.match(key) or key in _HEADER:
@@ -284,10 +348,12 @@ def snapshot_paths(out: str | os.PathLike) -> tuple[Path, Path]:
 
 __all__ = [
     "ANGSTROM_PER_M",
+    "FRAMES",
     "FS_PER_S",
     "RecordingProfile",
     "SnapshotError",
     "Trajectory",
+    "VelocityFrame",
     "format_frame",
     "snapshot_paths",
     "write_extxyz",

@@ -40,6 +40,7 @@ from ..analysis.linear_hugoniot import shock_velocity
 from ..eos import EOS
 from ..failures import StageFailed
 from ..io.dataset import si_units
+from ..io.extxyz import VelocityFrame
 from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
 from ..strength import Strength
 
@@ -452,10 +453,22 @@ def _box(sim, info: dict) -> tuple[float, ...]:
     return (lo, hi, float(sim.lo[1]), float(sim.lo[1] + sim.length[1]))
 
 
+def velocity_frame(solver) -> VelocityFrame:
+    """The frame of a CSPH run's velocities (``io.extxyz.VelocityFrame``, SI): a piston run's
+    is the lab frame, the upstream material at rest (``lab``, frame velocity 0); a window's
+    (it has a ``geom``, as ``profile`` tells them apart) moves with the window, the upstream
+    flowing in at u_in (``window``, frame velocity −u_in [m/s], edges x_lo, x_hi [m])."""
+    if hasattr(solver, "geom"):
+        g = solver.geom
+        return VelocityFrame("window", -float(solver.u_in), float(g.x_lo), float(g.x_hi))
+    return VelocityFrame("lab", 0.0)
+
+
 def _frame(solver, scene: dict, info: dict, tags: dict) -> str:
     """An extended-XYZ frame of a CSPH run (``sph.snapshot.sph_frame``: Å, Å/fs, fs): velo,
     ρ [kg/m³], e [J/kg], P_xx = −σ_xx [Pa], eps_p [-], ``plastic`` (eps_p >
-    ``PLASTIC_THRESHOLD``), ``frozen`` (boundary particles of a window), radius l/2."""
+    ``PLASTIC_THRESHOLD``), ``frozen`` (boundary particles of a window), radius l/2; the
+    velocities' frame (``velocity_frame``)."""
     from .snapshot import PLASTIC_THRESHOLD, sph_frame
 
     sim = getattr(solver, "sim", solver)
@@ -470,6 +483,7 @@ def _frame(solver, scene: dict, info: dict, tags: dict) -> str:
         units={"rho": "kg/m^3", "e": "J/kg", "P_xx": "Pa", "eps_p": "1"},
         periodic=(False, bool(sim.periodic[1]), False), radius=0.5 * st.l,
         info={"scene": scene.get("name", ""), **tags, "step": int(solver.steps)},
+        frame=velocity_frame(solver),
     )  # fmt: skip
 
 

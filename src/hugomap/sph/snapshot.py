@@ -7,7 +7,9 @@ positions, ``Lattice``, ``Origin`` and ``radius`` in Å (converted from metres),
 (kg per metre of depth in 2D, per m² of cross-section in 1D; so ASE's ``momenta`` are in
 those units × Å/fs); the other fields are SI and say so in the ``units`` key. 2D (and 1D)
 positions are padded with z = 0 (and y = 0), and the missing cell lengths are ``depth``
-(default: the largest box length, so the cell is never singular).
+(default: the largest box length, so the cell is never singular). The velocities' frame
+(``io.extxyz.VelocityFrame``, given in SI) is written in the same units: ``frame_velocity``
+in Å/fs, a window's edges ``x_lo``, ``x_hi`` in Å.
 
 PNG (``write_png``): the 2D particles drawn as dots with axes in mm and equal aspect;
 plastically deformed particles (accumulated plastic strain > threshold) in green, as in the
@@ -30,6 +32,7 @@ from ..io.extxyz import (
     ANGSTROM_PER_M,
     FS_PER_S,
     SnapshotError,
+    VelocityFrame,
     format_frame,
 )
 
@@ -54,6 +57,7 @@ def sph_frame(
     depth: float | None = None,
     radius: np.ndarray | None = None,
     info: Mapping[str, object] | None = None,
+    frame: VelocityFrame | None = None,
 ) -> str:
     """One extended-XYZ frame of SPH particles (module docstring) as text.
 
@@ -62,7 +66,8 @@ def sph_frame(
     values in 3D [m]; masses (n,) or one value, in ``mass_unit``; time [s]; species: one
     symbol or one per particle (ASE needs chemical symbols); periodic: three flags; depth [m]:
     cell length along the padded axes; radius (n,) [m]: the ``radius`` column in Å (OVITO
-    draws particles with it, e.g. half the particle size l); info: more comment-line pairs.
+    draws particles with it, e.g. half the particle size l); info: more comment-line pairs;
+    frame: the velocities' frame, velocity [m/s] and edges [m] (written in Å/fs and Å).
     """
     box = [float(b) for b in box]
     if len(box) not in (2, 4, 6) or not all(math.isfinite(b) for b in box):
@@ -101,6 +106,7 @@ def sph_frame(
         time_unit="fs",
         units=unit_map,
         info=info,
+        frame=None if frame is None else frame.scaled(ANGSTROM_PER_M, ANGSTROM_PER_M / FS_PER_S),
     )
 
 
