@@ -6,6 +6,8 @@ import functools
 
 import numpy as np
 
+from .linear_hugoniot import shock_velocity
+
 
 def block_average(series: np.ndarray, n_blocks: int = 8) -> tuple[float, float]:
     """Mean and standard error of a correlated series by block averaging.
@@ -214,7 +216,7 @@ def linear_hugoniot_fit(
     A = X.T @ (w[:, None] * X)
     cov = np.linalg.inv(A)
     c0, s = cov @ (X.T @ (w * d))
-    r = d - (c0 + s * u)
+    r = d - shock_velocity(u, c0, s)
     dof = u.size - 2
     chi2 = float(np.sum(w * r * r) / dof) if dof > 0 else nan
     if not have.all():  # unweighted: the scatter is the only error estimate
