@@ -206,3 +206,6 @@ def test_snapshot_is_an_extended_xyz_of_the_last_state(tmp_path) -> None:
     np.testing.assert_allclose(frame.get_positions(), x, atol=1e-9)
     np.testing.assert_allclose(frame.get_velocities(), v, atol=1e-9)
     np.testing.assert_array_equal(frame.arrays["id"], ids)
+    # the piston's frame: v_x + frame_velocity is relative to the material at rest ahead
+    assert frame.info["velocity_frame"] == "piston"
+    assert frame.info["frame_velocity"] == pytest.approx(1.0)

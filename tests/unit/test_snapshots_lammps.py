@@ -60,6 +60,9 @@ def test_md_snapshot_read_by_ase(sim, tmp_path):
     assert atoms.info["length_unit"] == "sigma" and atoms.info["time_unit"] == "tau"
     assert "P_xx:epsilon/sigma^3" in atoms.info["units"] and atoms.info["u_p"] == 1.5
     assert atoms.info["Time"] == s.time and atoms.info["run"] == "piston"
+    # the frame of the velocities: the piston's, the far wall moving at -frame_velocity
+    assert atoms.info["velocity_frame"] == "piston"
+    assert atoms.info["frame_velocity"] == pytest.approx(-s.walls0[3], abs=1e-12)
     # Per-atom P_xx averages to the profile's P_xx in every bin; e to its e.
     from hugomap.md.profiles import fields_from_sums
 

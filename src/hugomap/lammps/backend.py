@@ -456,8 +456,10 @@ class LammpsBackend:
         if not scene["shock"].get("snapshots", True):
             return
         from ..io.extxyz import format_frame, snapshot_paths, write_extxyz
+        from ..md.snapshot import velocity_frame
         from .simulation import native
 
+        frame = velocity_frame(solver)  # looks through an SI view to the native units
         solver = native(solver)
         x, v, ids = solver.arrays()
         pe = solver.per_atom_energy_virial()[0][np.argsort(solver._ids(), kind="stable")]
@@ -467,7 +469,7 @@ class LammpsBackend:
         text = format_frame(
             x, (hi - lo, solver.L[1], solver.L[2]), velocities=v, fields={"id": ids, "pe": pe},
             origin=(lo, 0.0, 0.0), pbc=(False, True, True), time=float(solver.time),
-            **self._snapshot_units(scene),
+            frame=frame, **self._snapshot_units(scene),
             info={"scene": scene.get("name", ""), **tags,
                   "step": int(solver.steps), "solver": "lammps",
                   "pair_style": scene["model"]["pair_style"]},

@@ -128,9 +128,11 @@ def md_frame(solver, scene: dict, tags: dict) -> str:
     x_lo = min(float(xs.min()), xl, xr, 0.0)
     x_hi = max(float(xs.max()), xl, xr, x_lo + width)
     from ..io.extxyz import format_frame
+    from .snapshot import velocity_frame
 
     return format_frame(
         s.x, np.array([x_hi - x_lo, s.L[1], s.L[2]]), velocities=s.v, masses=1.0,
+        frame=velocity_frame(solver),
         fields=fields, species="Ar", origin=(x_lo, 0.0, 0.0), pbc=tuple(bool(p) for p in s.periodic),
         time=float(s.time), length_unit="sigma", time_unit="tau",
         units={"masses": "m", "momenta": "m*sigma/tau", "P_xx": "epsilon/sigma^3",
