@@ -54,6 +54,10 @@ FAILURES: dict[str, tuple[str, str]] = {
     "no_shock": ("control", "MW lowered the amplitude to nothing: the held D is below c0"),
     "bracket_not_found": ("dichotomy", "<domega/dt> kept one sign over every trial"),
     "max_iterations": ("dichotomy", "the bracket was still too wide at the iteration limit"),
+    "pole_off_pressure": (
+        "bad input",
+        "the crystal's pole is not at the pressure its lattice was searched for",
+    ),
 }
 
 
