@@ -62,6 +62,8 @@ from ..analysis.shock import bin_edges, slab_state
 from ..analysis.stats import block_average
 from ..io.dataset import UnitTable, lj_units, si_units
 from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
+from .lattice import STATUS as POLE_OFF_PRESSURE
+from .lattice import bin_width, lattice_density
 from .scene_config import pair_style_name
 from .units import METAL, UnitSystem, number_density_factor, si_pole, unit_system
 
@@ -221,12 +223,25 @@ class LammpsBackend:
         measured (``sizing``; its energies in ε | eV per atom, ``T_nvt`` in ε/k_B | K).
         Units metal: T0 [K], Maxwell velocities of variance k_B T0/(m mvv2e) [Å²/ps²], the
         pole in SI through ``view`` and ``MetalProfile`` (ρ0 [kg/m³], P0, Pyy0 [Pa], E0
-        [J/kg], T0 [K]), the layer 8 Å."""
+        [J/kg], T0 [K]), the layer 8 Å.
+
+        A crystal with ``sample.lattice_pressure`` is built at the lattice constant of that
+        pressure at T0 (``lattice_search.search_lattice``, recorded as ``info["lattice"]``),
+        its pole measured in bins of that lattice (``lattice.bin_width``) and checked against
+        that pressure (``lattice.pole_pressure_problem``): a pole off it leaves the
+        simulation's ``check`` set, and ``save`` writes the sample with status
+        ``pole_off_pressure``."""
         from ..md.sample import fcc_positions, maxwell_velocities, size_bulk
+        from .lattice import searched
+        from .lattice_search import search_lattice
         from .simulation import LammpsSimulation
 
         s, us = scene["sample"], self.usys
-        x, L = fcc_positions(tuple(s["cells"]), s["rho0"])
+        info: dict[str, Any] = {}
+        if searched(scene):
+            info["lattice"] = search_lattice(scene)
+        rho_n = lattice_density(scene, info)
+        x, L = fcc_positions(tuple(s["cells"]), rho_n)
         # velocity variance k_B T0/(m mvv2e) [velocity²] (lj: T0 itself)
         mkin = float(scene["model"]["mass"]) * us.mvv2e
         v = maxwell_velocities(x.shape[0], us.k_B * s["T0"] / mkin, s["seed"])
@@ -235,11 +250,9 @@ class LammpsBackend:
             s["dt"], T_bath=s["T0"], tau_bath=s["thermostat_tau"], seed=s["seed"],
         )  # fmt: skip
         n_eq = int(round(s["equilibrate_time"] / s["dt"]))
-        info: dict[str, Any] = {}
         layer = WALL_LAYER[us.name]
         if scene["phase"] == "crystal" and n_eq > 0:
-            c = self.sound_speed(scene)  # the reference's c0, else the unit system's
-            c = CRYSTAL_SOUND[us.name] if c is None else self._native_velocity(c)
+            c = self._crystal_sound(scene)
             damp = float(sim.L[0]) / (2.0 * math.pi * c)  # critical: slowest standing wave
             sim.run_langevin(float(s["T0"]), damp, n_eq)
             info["langevin"] = {"damp": damp, "steps": float(n_eq)}
@@ -247,13 +260,13 @@ class LammpsBackend:
         if n_eq > 0:
             # "T0" is k_B T0 in sim.energies()'s unit (lj: T0). No local thermostat yet: with it
             # this backend's LJ test box gave energy residuals near -3 %, not understood
-            info.update(size_bulk(sim, s["rho0"], us.k_B * s["T0"], n_eq, layer,
+            info.update(size_bulk(sim, rho_n, us.k_B * s["T0"], n_eq, layer,
                                   resize=scene["phase"] != "crystal", local=False))  # fmt: skip
             info["T_nvt"] = info["T_nvt"] / us.k_B  # [ε/k_B | K]
             log.info("sample sized: %s", json.dumps(info))
         sim.T_bath = None
         view = self.view(sim)
-        prof = self.profile(view, scene)
+        prof = self.profile(view, scene, info)
         nsamples = max(int(round(s["pole_time"] / (s["dt"] * POLE_EVERY))), 16)
         keys = {"rho": "rho0", "P": "P0", "E": "E0", "T": "T0", "Pyy": "Pyy0"}
         series: dict[str, list[float]] = {k: [] for k in keys}
@@ -268,10 +281,64 @@ class LammpsBackend:
         pole = {}
         for k, name in keys.items():
             pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
-        return sim, Pole.from_dict(pole), {"sizing": info}
+        out = {"sizing": {k: v for k, v in info.items() if k != "lattice"}}
+        if "lattice" in info:
+            out["lattice"] = info["lattice"]
+            out["lattice"]["pole_check"] = self._check_sample_pole(
+                scene, info, float(sim.L[0]), pole, self._crystal_sound(scene)
+            )
+            if out["lattice"]["pole_check"]:
+                log.error("%s: %s", POLE_OFF_PRESSURE, out["lattice"]["pole_check"])
+                sim.check = (POLE_OFF_PRESSURE, out["lattice"]["pole_check"])
+        return sim, Pole.from_dict(pole), out
+
+    def _crystal_sound(self, scene: dict) -> float:
+        """A crystal's longitudinal sound speed [σ/τ | Å/ps]: the reference's c0
+        (``sound_speed``), else the unit system's ``CRYSTAL_SOUND``."""
+        c = self.sound_speed(scene)
+        return CRYSTAL_SOUND[self.usys.name] if c is None else self._native_velocity(c)
+
+    def _check_sample_pole(
+        self, scene: dict, info: dict, L_x: float, pole: dict[str, float], c: float
+    ) -> str:
+        """``lattice.pole_pressure_problem`` on the prepared sample's pole (the backend's
+        units), with what a user can change: the slab's breathing between its free faces
+        (``lattice.breathing_period`` of ``L_x`` [σ | Å] at the sound speed ``c`` [σ/τ |
+        Å/ps]) against ``sample.pole_time``, the search's run time, the requested pressure
+        and its tolerance; '' when the pole is at the pressure."""
+        from .lattice import breathing_period, pole_pressure_problem
+
+        s, lat = scene["sample"], info["lattice"]
+        problem = pole_pressure_problem(pole["P0"], pole["P0_err"], pole.get("Pyy0"), scene,
+                                        "the prepared sample's pole")  # fmt: skip
+        if not problem:
+            return ""
+        t = "tau" if self.usys.name == "lj" else "ps"
+        return (
+            f"{problem}; the crystal was built at the lattice constant "
+            f"{lat['lattice_constant']:.6g} ± {lat['lattice_constant_err']:.2g} "
+            f"(the NPT search at {lat['pressure']:g} {lat['pressure_unit']} and T0, which "
+            f"measured {lat['pressure_measured']:.3g} ± {lat['pressure_measured_err']:.2g}). "
+            "Between the walls its faces along x are free: its P_xx is near 0 unless it "
+            "presses on the walls (a lattice under a positive pressure), and its length "
+            f"breathes with a period 2 L_x/c of about {breathing_period(L_x, c):.3g} {t}, "
+            f"which a pole averages out only over a whole period (sample.pole_time = "
+            f"{s['pole_time']:g} {t}). Lengthen sample.pole_time or "
+            "sample.lattice_search.run_time, or change sample.lattice_pressure or "
+            "sample.pressure_tolerance"
+        )
 
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
-        """Save a simulation, a window or their SI views (each saves what it holds)."""
+        """Save a simulation, a window or their SI views (each saves what it holds). A
+        simulation whose preparation failed a check (``LammpsSimulation.check``: a pole off
+        its lattice's pressure, ``prepare``) is saved with that status and diagnostic in
+        place of the stage's: its state and pole are kept to be looked at, and every stage
+        that starts from it ends with that status."""
+        from .simulation import native
+
+        check = getattr(native(solver), "check", None)
+        if check is not None:
+            attrs = {**attrs, "status": check[0], "diagnostic": check[1]}
         return solver.save(out, extra=extra, attrs=attrs)
 
     def read_checkpoint(self, path: str | os.PathLike) -> xr.Dataset:
@@ -329,10 +396,11 @@ class LammpsBackend:
 
     def profile(self, solver, scene: dict, info: dict | None = None):
         """The MD backend's reader (``md.backend.MDProfile``): bins from x = 0 across
-        L_y L_z, fields by ``md.profiles.fields_from_sums`` (units lj, m = 1)."""
+        L_y L_z, fields by ``md.profiles.fields_from_sums`` (units lj, m = 1); the bins'
+        width ``lattice.bin_width`` (``shock.bin_width``, scaled with a searched lattice)."""
         from ..md.backend import MDProfile
 
-        return MDProfile(_area(solver), scene["shock"]["bin_width"])
+        return MDProfile(_area(solver), bin_width(scene, info))
 
     # -- the window ------------------------------------------------------------------------
     def open_window(
@@ -344,7 +412,8 @@ class LammpsBackend:
         reservoir made by LAMMPS with the scene's model (``md.reservoir.make_reservoir``
         through ``window.LammpsKit``). ``front``,
         ``u_p``, ``D_guess`` arrive in the frame's units (metal: SI) and are converted to
-        the simulation's; the returned window, pole and ω are in the frame's."""
+        the simulation's; the returned window, pole and ω are in the frame's. A crystal's
+        reservoir and seam are at the sample's lattice (``_lattice_density``)."""
         from ..md.reservoir import inflow_screen, make_reservoir
         from ..md.window import MDWindow
         from ..window.methods import OmegaSignal
@@ -356,8 +425,9 @@ class LammpsBackend:
         fluid = scene["phase"] != "crystal"
         kit = LammpsKit(scene["model"])
         rho_n, e_n = self._native_pole(scene, pole)
+        rho_c = rho_n if fluid else self._lattice_density(scene, info, pole)
         res, inflow = make_reservoir(
-            (s["cells"][1], s["cells"][2]), rho_n if fluid else s["rho0"], s["T0"], None,
+            (s["cells"][1], s["cells"][2]), rho_c, s["T0"], None,
             sim.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"], s["thermostat_tau"],
             E0_target=e_n if fluid else None, kit=kit, min_length=w["reservoir_length"],
             screen=inflow_screen(w, sh["gap"], self._native_velocity(D_guess)) if fluid else None,
@@ -369,7 +439,7 @@ class LammpsBackend:
             sim, res, front / to_native, self._native_velocity(u_p),
             self._native_velocity(D_guess), w["length"], w["front_fraction"], w["ghost_width"],
             w["cut_every"], w["sync_steps"], crystal=not fluid,
-            lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0), kit=kit, segment=w["reservoir_segment"],
+            lattice=(4.0 / rho_c) ** (1.0 / 3.0), kit=kit, segment=w["reservoir_segment"],
         )  # fmt: skip
         res.close()
         wpole = pole if fluid else Pole.from_dict(inflow)
@@ -380,7 +450,7 @@ class LammpsBackend:
                 lambda st: self._count_density(scene, st["rho"]))  # fmt: skip
         else:  # q = Σ P_xx over the window's volume
             up, q_of = wpole.P0, (lambda st: st["P"])
-        sig = OmegaSignal.from_settled(view, self.profile(view, scene), w["omega"],
+        sig = OmegaSignal.from_settled(view, self.profile(view, scene, info), w["omega"],
                                        self._length(sh["gap"]), w["front_fraction"], up,
                                        q_of)  # fmt: skip
         return WindowStart(view, wpole, sig, {f"inflow_{k}": v for k, v in inflow.items()})
@@ -425,19 +495,38 @@ class LammpsBackend:
 
     def reference_pole(self, scene: dict, pole: Pole) -> dict[str, float]:
         """The MD backend's rule (``MDBackend.reference_pole``): the measured T0 and, for a
-        fluid, the measured ρ0 (a crystal: the lattice's)."""
+        fluid, the measured ρ0 (a crystal: the lattice's; a searched one's from the pole,
+        ``_lattice_scene``)."""
         from ..md.backend import MDBackend
 
-        return MDBackend().reference_pole(scene, pole)
+        return MDBackend().reference_pole(self._lattice_scene(scene, pole), pole)
+
+    def _lattice_density(self, scene: dict, info: dict | None, pole: Pole | None) -> float:
+        """The number density [σ⁻³ | Å⁻³] of the scene's crystal
+        (``lattice.lattice_density``: the searched lattice in ``info``, else the pole's ρ0 for
+        a searched scene, else the nominal ``sample.rho0``)."""
+        rho = None if pole is None else self._native_pole(scene, pole)[0]
+        return lattice_density(scene, info, rho)
+
+    def _lattice_scene(self, scene: dict, pole: Pole | None) -> dict:
+        """The scene with ``sample.rho0`` its searched crystal's number density (from the
+        sample's pole: ``_lattice_density``); any other scene as it is."""
+        from .lattice import searched
+
+        if pole is None or not searched(scene):
+            return scene
+        rho = self._lattice_density(scene, None, pole)
+        return {**scene, "sample": {**scene["sample"], "rho0": rho}}
 
     def reference(self, scene: dict, pole: Pole | None = None) -> xr.Dataset:
         """The equilibrium-MD Hugoniot of the same potential (``MDBackend.reference`` on the
         scene's lj/cut model: rc from ``pair_style``, shift from ``pair_modify shift yes``,
         the skin); its ``reference_inputs`` attribute is this backend's. Other models:
-        ``NotImplementedError`` (a LAMMPS reference is a later slice)."""
+        ``NotImplementedError`` (a LAMMPS reference is a later slice). A searched crystal's
+        reference is at its lattice (``_lattice_scene``)."""
         from ..md.backend import MDBackend
 
-        ds = MDBackend().reference(md_view(scene), pole)
+        ds = MDBackend().reference(md_view(self._lattice_scene(scene, pole)), pole)
         ds.attrs["reference_inputs"] = json.dumps(self.reference_inputs(scene, pole),
                                                   sort_keys=True)  # fmt: skip
         ds.attrs["reference_model"] = "equilibrium MD (hugomap.md.reference) of the lj/cut model"
@@ -481,14 +570,16 @@ class LammpsBackend:
         self, scene: dict, scheme: str, u_p: float, pole: Pole, info: dict
     ) -> ShockFrameResult:
         """``lammps.shockframe.shock_frame_point``: a periodic box of the scene's model at the
-        sample's ``pole`` (a crystal: the box's own pole at the lattice's ρ0) held on its
-        Hugoniot by ``fix nphug`` or ``fix msst``, iterated until u_p [σ/τ | m/s] is the
+        sample's ``pole`` (a crystal: the box's own pole at the lattice's ρ0,
+        ``_lattice_density``, checked against ``sample.lattice_pressure`` when given) held on
+        its Hugoniot by ``fix nphug`` or ``fix msst``, iterated until u_p [σ/τ | m/s] is the
         scene's; the start from ``sound_speed`` (lj: none, measured on the box). Values in
         the frame's units (metal: SI)."""
         from ..backend import ShockFrameResult
         from .shockframe import shock_frame_point
 
-        lattice = scene["sample"]["rho0"] if scene["phase"] == "crystal" else None
+        crystal = scene["phase"] == "crystal"
+        lattice = self._lattice_density(scene, info, pole) if crystal else None
         values, status, diagnostic, attrs, used = shock_frame_point(
             scene, scheme, u_p, pole, self.sound_speed(scene), lattice
         )
@@ -504,8 +595,8 @@ class LammpsBackend:
     def cost(self, scene: dict, stage: str) -> Resources:
         """Memory: LAMMPS's per-atom storage plus the profile history (samples x bins x 11
         float64, held and copied once); CPU: an upper bound of atom-steps at
-        ``S_PER_ATOM_STEP`` (prepare: equilibration and pole; load/piston: up to
-        ``shock.max_time``; reference: as the MD backend's); ``ranks``: the scene's, the
+        ``S_PER_ATOM_STEP`` (prepare: equilibration, pole and a lattice search; load/piston:
+        up to ``shock.max_time``; reference: as the MD backend's); ``ranks``: the scene's, the
         memory that many times (every rank holds the gathered per-atom arrays)."""
         s, sh = scene["sample"], scene["shock"]
         if stage == "reference":
@@ -516,8 +607,12 @@ class LammpsBackend:
         ranks = int(scene["ranks"])
         if stage == "prepare":
             steps = (s["equilibrate_time"] + s["pole_time"]) / s["dt"]
+            search = 0.0
+            if "lattice_search" in s:  # the lattice's NPT box (lammps.lattice_search)
+                q = s["lattice_search"]
+                search = 4 * math.prod(q["cells"]) * q["run_time"] / s["dt"]
             mem = int(BASE_MB + n * BYTES_PER_ATOM / 2**20)
-            return Resources(ranks * mem, n * steps * S_PER_ATOM_STEP, ranks)
+            return Resources(ranks * mem, (n * steps + search) * S_PER_ATOM_STEP, ranks)
         length = s["cells"][0] * (4.0 / s["rho0"]) ** (1.0 / 3.0)
         hist = sh["max_time"] / sh["dt"] / sh["sample_every"] * (length / sh["bin_width"] + 1) * 88
         mem = int(BASE_MB + (n * BYTES_PER_ATOM + 2 * hist) / 2**20)
@@ -657,8 +752,9 @@ class MetalBackend(LammpsBackend):
         return {"gap": self._length(sh["gap"]), "avg_length": self._length(sh["avg_length"])}
 
     def profile(self, solver, scene: dict, info: dict | None = None) -> MetalProfile:
-        """The SI reader (``MetalProfile``) at ``shock.bin_width`` [Å]."""
-        return MetalProfile(_area(solver), scene["shock"]["bin_width"], scene["model"]["mass"])
+        """The SI reader (``MetalProfile``) at ``shock.bin_width`` [Å] (``lattice.bin_width``:
+        scaled with a searched lattice)."""
+        return MetalProfile(_area(solver), bin_width(scene, info), scene["model"]["mass"])
 
     def reference_inputs(self, scene: dict, pole: Pole | None = None) -> None:
         """None: the fit is tabulated per scene in milliseconds."""

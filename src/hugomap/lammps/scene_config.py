@@ -8,8 +8,10 @@ nphug (``SHOCK_FRAME_SCHEMES``, ``lammps.shockframe``) with their ``shock_frame`
 Defaults that depend on the unit system (``DEFAULTS``: time steps and times [τ | ps],
 lengths [σ | Å], the skin, lj's mass, the window's lengths and times, the dichotomy's
 velocities [σ/τ | m/s], the shock-frame times and MSST's q and mu) are
-resolved here, as are ``sample.rho0`` from ``sample.lattice_constant`` and metal's bin
-width (the lattice constant: two (100) planes).
+resolved here, as are ``sample.rho0`` from ``sample.lattice_constant``, metal's bin
+width (the lattice constant: two (100) planes) and, for a crystal given
+``sample.lattice_pressure``, the pole's pressure tolerance and the lattice search's run
+(``LATTICE_DEFAULTS``; ``lammps.lattice``).
 """
 
 from __future__ import annotations
@@ -83,6 +85,16 @@ DEFAULTS: dict[str, dict[str, dict[str, float]]] = {
         "shock_frame.msst": {"q": 100.0, "mu": 300.0, "tscale": 0.01, "relax_time": 4.0},
     },
 }  # fmt: skip
+#: Defaults of the zero-pressure lattice's keys (``lammps.lattice``), resolved only for a
+#: scene that gives ``sample.lattice_pressure`` (the others' resolved config is unchanged):
+#: the pole's pressure tolerance [ε σ⁻³ | GPa] and the NPT run [τ | ps]: a box and a
+#: barostat time whose lattice constant, on copper and on the LJ crystal, did not move
+#: beyond its error with a larger box or a slower barostat.
+LATTICE_DEFAULTS: dict[str, dict[str, float]] = {
+    "lj": {"pressure_tolerance": 0.05, "run_time": 20.0, "pdamp": 2.0},
+    "metal": {"pressure_tolerance": 0.1, "run_time": 6.0, "pdamp": 1.0},
+}
+LATTICE_CELLS = [5, 5, 5]
 #: Ranges that depend on the unit system: (key, lj range, metal range) (inclusive).
 UNIT_RANGES = (
     ("sample.T0", (0.01, 50.0), (1.0, 5000.0), "epsilon/k_B | K"),
@@ -175,6 +187,13 @@ def resolve_defaults(scene: dict) -> None:
     if units == "metal" and "rho0" in smp:
         a = smp.get("lattice_constant") or lattice_constant(smp["rho0"])
         scene["shock"].setdefault("bin_width", float(a))
+    if "lattice_pressure" in smp and units in LATTICE_DEFAULTS:
+        d = LATTICE_DEFAULTS[units]
+        smp.setdefault("pressure_tolerance", d["pressure_tolerance"])
+        search = smp.setdefault("lattice_search", {})
+        search.setdefault("cells", list(LATTICE_CELLS))
+        search.setdefault("run_time", d["run_time"])
+        search.setdefault("pdamp", d["pdamp"])
 
 
 def lattice_constant(rho: float) -> float:
@@ -279,8 +298,27 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             f"shock.load_fraction = {sh['load_fraction']} for {box}"
         )
     problems += _check_reference(base, scene)
+    problems += _check_lattice(base, scene)
     problems += duplicate_point_tags(base, sh["u_p"])
     return problems
+
+
+def _check_lattice(base: str, scene: dict) -> list[str]:
+    """``sample.lattice_pressure`` on a crystal only (a fluid's box is sized to its ρ0), and
+    its companion keys only with it."""
+    smp, key = scene["sample"], f"{base}.sample"
+    if "lattice_pressure" not in smp:
+        return [
+            f"{key}.{k}: has effect only with {key}.lattice_pressure (give it, or leave "
+            f"{k} out)" for k in ("pressure_tolerance", "lattice_search") if k in smp
+        ]  # fmt: skip
+    if scene["phase"] != "crystal":
+        return [
+            f"{key}.lattice_pressure = {smp['lattice_pressure']}: a crystal's key (phase: "
+            f"crystal; this scene's phase is {scene['phase']!r}: a fluid's box is sized to "
+            f"{key}.rho0)"
+        ]
+    return []
 
 
 def _check_window(base: str, scene: dict) -> list[str]:

@@ -63,7 +63,7 @@ import numpy as np
 from ..analysis.causes import CLOSE_SIGMAS, closes, residual_text
 from ..analysis.shock import jump_residual_errors, jump_residuals
 from ..analysis.stats import block_average
-from ..failures import SolverUnstable
+from ..failures import SolverUnstable, StageFailed
 from ..states import Pole
 from .units import BAR_PA, UnitSystem, number_density_factor, specific_energy_factor, unit_system
 
@@ -402,6 +402,26 @@ def box_sound_speed(box: FrameBox, params: Params, conv: Native, rho0: float) ->
     return math.sqrt(dP / (rho0 * STRAIN)) if dP > 0 else math.nan
 
 
+def check_box_pole(scene: dict, pole: Pole, rho_lattice: float) -> None:
+    """A crystal box built at a searched lattice (``sample.lattice_pressure``): its pole must
+    be at that pressure (``lattice.pole_pressure_problem``), else ``StageFailed`` with status
+    ``pole_off_pressure`` and a diagnostic naming the box's lattice constant [σ | Å] and the
+    keys to change. A scene without the key is not checked."""
+    from .lattice import STATUS, pole_pressure_problem, searched
+
+    if not searched(scene):
+        return
+    problem = pole_pressure_problem(pole.P0, pole.P0_err, pole.Pyy0, scene,
+                                    "the shock-frame box's pole")  # fmt: skip
+    if problem:
+        a = (4.0 / rho_lattice) ** (1.0 / 3.0)
+        raise StageFailed(STATUS, (
+            f"{problem}; the periodic box was built at the sample's lattice constant {a:.6g} "
+            "(the lattice search's, read from the sample). Lengthen "
+            "sample.lattice_search.run_time, or change sample.lattice_pressure or "
+            "sample.pressure_tolerance"))  # fmt: skip
+
+
 def up_reached(miss: float, err: float, u_p: float, tol: float, up_tolerance: float) -> bool:
     """Whether a measured u_p that misses the scene's ``u_p`` by ``miss`` ± ``err`` (same
     velocity units) is at it: within ``up_tolerance`` of u_p (the scene's ``shock_frame``
@@ -422,7 +442,8 @@ def shock_frame_point(
     box); ``rho_lattice``: a crystal's FCC number density [σ⁻³ | Å⁻³] (None: a fluid, its
     box made at the pole's ρ0; a crystal's box measures its own pole in NVE at T0 and
     holds the Hugoniot from it, as the window's inflow of a crystal does: the sample's P0
-    between walls need not be the periodic lattice's). Returns (values, status, diagnostic,
+    between walls need not be the periodic lattice's; a searched lattice's box pole is
+    checked, ``check_box_pole``). Returns (values, status, diagnostic,
     attrs, the pole used as a dict): values as
     ``analysis.shock.measure_point`` names them (D, u_p_measured, ρ, V, P, Pyy, Pzz, T, E,
     E_minus_E0, P_rh, shear_stress, the residuals, each with ``_err``, n_samples,
@@ -453,6 +474,7 @@ def shock_frame_point(
             n_pole = max(int(round(prm.average_time / prm.dt / prm.sample_every)), 2 * N_BLOCKS)
             pole = box_pole(box.sample(n_pole, prm.sample_every), box.n, conv)
             log.info("shock-frame pole (the crystal box's): %s", pole.as_dict())
+            check_box_pole(scene, pole, rho_lattice)
         # the pole in LAMMPS's units for the fixes: total volume and energy of n atoms
         V0_tot = n / (pole.rho0 / conv.density)
         E0_tot = n * pole.E0 / conv.energy

@@ -166,6 +166,9 @@ class LammpsSimulation(PerAtomAccess):
         self._box_hi = float(self.L[0]) + self.pad
         self._left_def: str | None = None  # the left wall's fix as defined now
         self.ref_velocity = 0.0  # MDState's list-rebuild drift: LAMMPS has its own lists
+        #: A failed check of the prepared state, (status, diagnostic), that the backend's
+        #: ``save`` records in place of the stage's status (``LammpsBackend.prepare``).
+        self.check: tuple[str, str] | None = None
         self._arrays_current = False  # per-atom energy and virial of the current positions
         self.lmp = lammps_class()(cmdargs=["-log", "none", "-screen", "none", "-nocite"])
         self.ranks = int(self.lmp.extract_setting("world_size"))  # MPI ranks of this run

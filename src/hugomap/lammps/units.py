@@ -28,6 +28,7 @@ EV_J = 1.602176634e-19  # J per eV (exact)
 ANGSTROM_M = 1e-10  # m per Å
 PS_S = 1e-12  # s per ps
 BAR_PA = 1e5  # Pa per bar
+GPA_PA = 1e9  # Pa per GPa (a units-metal scene's pressures, e.g. sample.lattice_pressure)
 AMU_KG = 1.66053906660e-27  # kg per atomic mass unit (g/mol per atom)
 KB_EV_K = 8.617333262e-5  # Boltzmann constant [eV/K] (exact to its digits: k_B/e)
 
