@@ -77,7 +77,9 @@ def window_ahead_room(
     base: str, window: dict, shock: dict, unit: str, slab: tuple[str, str, float] | None = None
 ) -> list[str]:
     """A problem if a window (``window.length`` L, ``window.front_fraction`` f) leaves less
-    than 2 ``shock.gap`` + a slab ahead of the front: no slab ahead could be measured, so a
+    than 2 g_a + a slab ahead of the front, g_a = ``shock.ahead_gap`` (default
+    ``shock.gap``; the slab ahead keeps it from the front and from x_hi alike): no slab
+    ahead could be measured, so a
     point could never see the state its jump starts from (``analysis.causes.ahead_seen``).
     ``slab``: (what it is, its length's keys, its length) for the message and the test;
     default the narrowest slab measured, ``MIN_SLAB_BINS`` ``shock.bin_width``. ``unit``:
@@ -88,13 +90,15 @@ def window_ahead_room(
         MIN_SLAB_BINS * shock["bin_width"],
     )
     L, f = window["length"], window["front_fraction"]
-    need = 2.0 * shock["gap"] + length
+    ahead = shock.get("ahead_gap")
+    gap, gap_key = (shock["gap"], "shock.gap") if ahead is None else (ahead, "shock.ahead_gap")
+    need = 2.0 * gap + length
     if (1.0 - f) * L >= need * (1 - 1e-12):
         return []
     return [
         f"{base}.window.front_fraction = {f:g}: the window's (1 - front_fraction) x "
         f"window.length = {(1.0 - f) * L:.4g} {unit} ahead of the front must hold {what}, "
-        f"2 shock.gap + {keys} = {need:.4g} {unit}, to measure the state the jump starts "
+        f"2 {gap_key} + {keys} = {need:.4g} {unit}, to measure the state the jump starts "
         f"from; allowed range (0, {max(1.0 - need / L, 0.0):.4g}] (or a longer window.length)"
     ]
 
