@@ -123,7 +123,8 @@ def main(argv: list[str] | None = None) -> int:
     p = add("check-config", help="validate a YAML config")
     p.add_argument("config")
     p = add("status", help="a sweep's progress: points done, running, failed, pending per scene")
-    p.add_argument("--results", default="results", help="results folder (default: results)")
+    p.add_argument("--results", default=None,
+                   help="results folder (default: the --config's `results`, else results)")  # fmt: skip
     p.add_argument(
         "--config",
         default=None,

@@ -571,7 +571,7 @@ def format_table(report: dict[str, Any], width: int | None = None) -> str:
 
 
 def run_status(
-    results: str | Path = "results",
+    results: str | Path | None = None,
     config_path: str | Path | None = None,
     as_json: bool = False,
     stream: TextIO | None = None,
@@ -579,7 +579,8 @@ def run_status(
 ) -> int:
     """What ``python -m hugomap status`` does: print the report; return the exit status.
 
-    ``config_path`` None: the config the results were made with (``recorded_config``: the
+    ``results`` None: the folder ``config_path`` names (its ``results`` key), else
+    ``results``. ``config_path`` None: the config the results were made with (``recorded_config``: the
     aggregates' ``config_json``, the scene files' ``scene_config``); where the results record
     none (nothing has run yet), ``config/config.yaml`` if it exists; else the scenes on
     disk. A config that does not validate raises ``ConfigError``.
@@ -593,6 +594,9 @@ def run_status(
 
     stream = stream or sys.stdout
     config, source = None, None
+    if results is None:
+        given = load_config(config_path) if config_path is not None else {}
+        results = given.get("results", "results")
     if config_path is None:
         config, files = recorded_config(results)
         if config is not None:

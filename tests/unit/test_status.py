@@ -21,12 +21,32 @@ import xarray as xr
 import yaml
 
 from hugomap.cli import main
-from hugomap.config import validate_config
+from hugomap.config import ConfigError, validate_config
 from hugomap.io.atomic import write_json, write_netcdf
 from hugomap.io.dataset import lj_units, point_dataset
 from hugomap.status import format_table, run_status, sweep_status
 
 ROOT = Path(__file__).resolve().parents[2]
+def test_the_results_folder_comes_from_the_config(
+    sweep: tuple[Path, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A config's ``results`` key names the folder its sweep writes and ``status`` reads
+    (no --results); without the key it is ``results``; a folder name with spaces or
+    shell characters is refused at validation, naming the key."""
+    res, cfg_file = sweep
+    cfg = yaml.safe_load(cfg_file.read_text())
+    cfg["results"] = str(res)
+    cfg_file.write_text(yaml.safe_dump(cfg))
+    assert main(["status", "--config", str(cfg_file), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["results"] == str(res) and report["scenes"][0]["counts"]["running"] == 1
+    del cfg["results"]
+    assert validate_config(cfg)["results"] == "results"
+    cfg["results"] = "my results; rm"
+    with pytest.raises(ConfigError, match="results"):
+        validate_config(cfg)
+
+
 NOW = 1.9e9  # a fixed "now" for checkpoint ages [s since the epoch]
 U_P = [0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0]
 

@@ -4,7 +4,7 @@ import math
 from pathlib import Path
 
 PY = sys.executable
-RES = "results"
+RES = config["results"]  # validated: the default "results" filled in
 
 
 def up_tag(u):
