@@ -27,6 +27,8 @@ from hugomap.io.dataset import lj_units, point_dataset
 from hugomap.status import format_table, run_status, sweep_status
 
 ROOT = Path(__file__).resolve().parents[2]
+
+
 def test_the_results_folder_comes_from_the_config(
     sweep: tuple[Path, Path], capsys: pytest.CaptureFixture[str]
 ) -> None:
