@@ -58,6 +58,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
+from ..analysis.linear_hugoniot import jump_state
 from ..analysis.shock import bin_edges, slab_state
 from ..analysis.stats import block_average
 from ..io.dataset import UnitTable, lj_units, si_units
@@ -668,16 +669,15 @@ def linear_reference(scene: dict, n_points: int = 60) -> xr.Dataset:
     rho0 = lattice_mass_density(scene)
     grid = np.linspace(0.0, 1.25 * max(scene["shock"]["u_p"]), n_points + 1)[1:]
     up = np.unique(np.concatenate([grid, np.asarray(scene["shock"]["u_p"], float)]))
-    D = c0 + s * up
-    V = (1.0 - up / D) / rho0
+    D, _, V, P, E = jump_state(up, rho0, c0, s)
     model = f"linear Us-u_p fit D = {c0:g} m/s + {s:g} u_p ({r.get('source', '')})"
     ds = xr.Dataset({
         "u_p": ("point", up, {"units": "m s^-1", "long_name": "particle velocity"}),
         "D": ("point", D, {"units": "m s^-1", "long_name": "shock velocity"}),
-        "P": ("point", rho0 * D * up, {"units": "Pa", "long_name": "pressure rho0 D u_p"}),
+        "P": ("point", P, {"units": "Pa", "long_name": "pressure rho0 D u_p"}),
         "V": ("point", V, {"units": "m^3 kg^-1", "long_name": "specific volume"}),
         "rho": ("point", 1.0 / V, {"units": "kg m^-3", "long_name": "density"}),
-        "E": ("point", 0.5 * up**2, {"units": "J kg^-1",
+        "E": ("point", E, {"units": "J kg^-1",
                                      "long_name": "specific internal energy jump"}),
     })  # fmt: skip
     ds.attrs.update(title=f"reference Hugoniot: {model}", reference_model=model,

@@ -61,6 +61,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..analysis.causes import CLOSE_SIGMAS, closes, residual_text
+from ..analysis.linear_hugoniot import shock_velocity
 from ..analysis.shock import jump_residual_errors, jump_residuals
 from ..analysis.stats import block_average
 from ..failures import SolverUnstable, StageFailed
@@ -379,7 +380,7 @@ def msst_D_error(its: list[Iteration], conv: Native) -> float:
 
 def start_target(scheme: str, c0: float, u_t: float, pole: Pole, conv: Native) -> float:
     """The first P or Us (native) from D ≈ c0 + s u_t: Us = D, P = P0 + ρ0 D u_t."""
-    D = c0 + SLOPE * u_t
+    D = shock_velocity(u_t, c0, SLOPE)
     if scheme == "msst":
         return D / conv.velocity
     return (pole.P0 + pole.rho0 * D * u_t) / conv.pressure
