@@ -180,6 +180,71 @@ def track_front(
                           u_behind, u_ahead)  # fmt: skip
 
 
+def track_precursor(
+    h: dict[str, np.ndarray], profile: Profile, ahead_gap: float, u_ahead: float,
+    u_plateau: float,
+) -> np.ndarray:  # fmt: skip
+    """Per sample, the front of an elastic precursor running ahead of the tracked front
+    (``h``'s ``front``, ``x_right``, ``sums`` as in ``measure_point``): ``front_position``
+    between the precursor's plateau flow ``u_plateau`` (behind it) and the upstream flow
+    ``u_ahead``, over the bins from ``ahead_gap`` ahead of the main front to the far
+    boundary. NaN in a sample where none is found or where it lies within ``ahead_gap`` of
+    that boundary (it has reached the far end, or left a window through its inflow)."""
+    xf = np.asarray(h["front"], dtype=float)
+    xr = np.asarray(h["x_right"], dtype=float)
+    sums = np.asarray(h["sums"], dtype=float)
+    edges = bin_edges(profile, sums.shape[1])
+    out = np.full(xf.size, np.nan)
+    for i in range(xf.size):
+        if not np.isfinite(xf[i]):
+            continue
+        u, count = profile.velocity(sums[i])
+        x = front_position(u, count, edges, xf[i] + ahead_gap, xr[i], u_plateau, u_ahead)
+        if np.isfinite(x) and x < xr[i] - ahead_gap:
+            out[i] = x
+    return out
+
+
+def precursor_plateau(
+    h: dict[str, np.ndarray], profile: Profile, ahead_gap: float, u_ahead: float,
+    u_p: float,
+) -> float:  # fmt: skip
+    """The flow velocity of a precursor's plateau, or NaN where the material ahead of the
+    tracked front shows none: in each sample, the bins from ``ahead_gap`` ahead of the front
+    to the far boundary split into two constant levels where they separate best (largest
+    k (n − k)/n · Δū²); a sample shows a precursor when its far level is the upstream flow
+    ``u_ahead`` (within a quarter of the step) and its near level leads it, in the sense of
+    the jump ``u_p`` (= u_behind − u_ahead), by more than ``TWO_WAVE_FRACTION`` of u_p. The
+    plateau is the median near level over the samples that show one, if at least half do.
+    (The slab ahead's mean cannot give it: while the precursor is young its plateau is
+    shorter than the slab, which then averages plateau and pole.)"""
+    xf = np.asarray(h["front"], dtype=float)
+    xr = np.asarray(h["x_right"], dtype=float)
+    sums = np.asarray(h["sums"], dtype=float)
+    edges = bin_edges(profile, sums.shape[1])
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    levels = []
+    for i in range(xf.size):
+        if not np.isfinite(xf[i]):
+            continue
+        u, count = profile.velocity(sums[i])
+        sel = (centres > xf[i] + ahead_gap) & (centres < xr[i]) & (count >= 2) & np.isfinite(u)
+        v = (u[sel] - u_ahead) * np.sign(u_p)
+        n = v.size
+        if n < 2 * MIN_SLAB_BINS:
+            continue
+        k = np.arange(MIN_SLAB_BINS, n - MIN_SLAB_BINS + 1)
+        c = np.concatenate([[0.0], np.cumsum(v)])
+        near, far = c[k] / k, (c[n] - c[k]) / (n - k)
+        j = int(np.argmax(k * (n - k) / n * (near - far) ** 2))
+        step = near[j] - far[j]
+        if step > TWO_WAVE_FRACTION * abs(u_p) and abs(far[j]) < 0.25 * step:
+            levels.append(near[j])
+    if len(levels) < max(1, np.isfinite(xf).sum() // 2):
+        return float("nan")
+    return float(u_ahead + np.sign(u_p) * np.median(levels))
+
+
 def jump_residuals(
     rho1: float,
     P1: float,
@@ -321,6 +386,7 @@ def measure_point(
     track: tuple[np.ndarray, np.ndarray] | None = None,
     u_p_from: str = "boundary",
     ahead_gap: float | None = None,
+    _precursor: tuple[float, float] | None = None,
 ) -> dict[str, float | str | bool]:
     """One Hugoniot point from the samples of a run (module docstring).
 
@@ -375,7 +441,13 @@ def measure_point(
     Two waves: when the state ahead carries a P_xx jump from P0 larger than
     ``TWO_WAVE_SIGMAS`` of its error and ``TWO_WAVE_FRACTION`` of P − P0, in the sense of
     P − P0 (an elastic precursor compresses), ``two_wave`` = 1 and the jump conditions are
-    taken from that state instead of the pole. Residuals (``jump_residuals``) with
+    taken from that state instead of the pole; the precursor's own front is then tracked
+    ahead of the main one (``track_precursor``), its speed stored as ``precursor_D`` (±
+    ``precursor_D_err``, the same slope rules as D; NaN with one wave, or where fewer than
+    half the samples see the precursor: it has left the measured region, as it leaves a
+    window through its inflow), and the point measured again with the slab ahead ending
+    ``ahead_gap`` short of the precursor's front, so that the state ahead is the
+    precursor's plateau, not a mixture with the pole's material. Residuals (``jump_residuals``) with
     first-order propagated errors (``jump_residual_errors``), and a fourth, the slab's flow:
     ``residual_flow`` = (u_p_measured − u_p)/u_p ± σ(u_p_measured)/u_p (a steady shocked
     state is at rest relative to the boundary that holds it). Status: ``ok`` when D, u_p, ρ, P, E are finite,
@@ -506,6 +578,28 @@ def measure_point(
         and lead > TWO_WAVE_FRACTION * abs(P - P0)
     )
     out["two_wave"] = float(two_wave)
+    out["precursor_D"], out["precursor_D_err"] = _precursor or (np.nan, np.nan)
+    # a precursor young enough that the slab ahead also reads the pole's material beyond it
+    # is off the pole but not uniform: look for its plateau whenever it leads by enough
+    if _precursor is None and np.isfinite(lead) and lead > TWO_WAVE_FRACTION * abs(P - P0):
+        ag = gap if ahead_gap is None else ahead_gap
+        plateau = precursor_plateau(h, profile, ag, u_ahead, u_p)
+        xp = (track_precursor(h, profile, ag, u_ahead, plateau) if np.isfinite(plateau)
+              else np.full(n, np.nan))  # fmt: skip
+        seen = np.isfinite(xp)
+        if seen.sum() >= max(2 * n_blocks, n // 2):
+            Dp = robust_slope(t[seen], xp[seen]) - u_ahead
+            _, Dp_err, _ = CorrelatedSlope().fit(t[seen], xp[seen])
+            wander_p = slope_scatter(t[seen], xp[seen])
+            Dp_err = max(float(Dp_err), wander_p) if np.isfinite(wander_p) else float(Dp_err)
+            # the state ahead read on the precursor's plateau only (none in a sample where
+            # the precursor was not seen: its slab ahead could hold the pole's material)
+            h2 = {**h, "x_right": np.where(seen, np.fmin(h["x_right"], xp), h["front"])}
+            return measure_point(
+                h2, profile, pole, u_behind, u_ahead, gap, avg_length, residual_tol,
+                left_gap=left_gap, front_speed=front_speed, n_blocks=n_blocks, track=track,
+                u_p_from=u_p_from, ahead_gap=ahead_gap, _precursor=(float(Dp), Dp_err),
+            )  # fmt: skip
     vals = {"D": D, "u": u_jump, "rho": rho, "P": P, "E": E}
     errs = {"D": D_err, "u": u_jump_err if at_slab else flow, "rho": out["rho_err"], "P": P_stat,
             "E": out["E_err"]}  # fmt: skip

@@ -75,6 +75,11 @@ POINT_VARS: dict[str, tuple[str, str]] = {
     "ahead_E": ("epsilon", "specific internal energy just ahead of the tracked front"),
     "ahead_u": ("sigma tau^-1", "particle velocity just ahead of the tracked front"),
     "two_wave": ("1", "1 when an elastic precursor runs ahead of the tracked front"),
+    "precursor_D": (
+        "sigma tau^-1",
+        "two waves: the elastic precursor's speed relative to the upstream material (its "
+        "state is ahead_*); NaN with one wave or once the precursor has left the measured region",
+    ),
     "ahead_off_pole": (
         "1",
         "1 when the state ahead is off the pole beyond 3 errors and residual_tol of the jump "
