@@ -207,6 +207,27 @@ def test_a_relaxation_zone_is_cleared_behind_and_the_state_ahead_read_close_to_t
     assert abs(both["residual_energy"]) < 0.002 and both["ahead_P"] == pytest.approx(1.0, rel=1e-3)
 
 
+def test_the_relaxation_zone_is_where_P_leaves_the_slabs_band():
+    """A mean profile with the front at 100 and P = 10 + 2 e^(−d/10) at a distance d behind
+    it (an overshoot of 20 % of the jump 10 − P0, P0 = 0, relaxing over 10 bins to the
+    slab's 10): the zone is the d at which |P − 10| falls to 1 % of the jump, 10 ln 20 ≈ 30; with
+    the band at 10 % it is 10 ln 2 ≈ 6.9; a flat profile has none; no front: NaN. One-bin
+    (1 σ) resolution."""
+    from hugomap.analysis.shock import relaxation_length
+
+    x = np.arange(0.5, 150.0)
+    d = 100.0 - x
+    P = np.where(d > 0, 10.0 + 2.0 * np.exp(-d / 10.0), 0.0)  # overshoot 2 = 20 % of the jump
+    assert relaxation_length(x, P, 100.0, 5.0, 10.0, 0.0, 0.01) == pytest.approx(
+        10 * np.log(20), abs=1.0
+    )
+    assert relaxation_length(x, P, 100.0, 5.0, 10.0, 0.0, 0.1) == pytest.approx(
+        10 * np.log(2), abs=1.0
+    )
+    assert relaxation_length(x, np.where(d > 0, 10.0, 0.0), 100.0, 5.0, 10.0, 0.0, 0.01) == 0
+    assert np.isnan(relaxation_length(x, P, np.nan, 5.0, 10.0, 0.0, 0.01))
+
+
 def test_front_speed_error_covers_a_slow_wander():
     """A front that wanders by A = 0.5 (one sine over the run, T = 20: an acoustic wave
     ringing longer than the average) moves a least-squares D by 6A/(πT) = 0.048 (the

@@ -245,6 +245,29 @@ def precursor_plateau(
     return float(u_ahead + np.sign(u_p) * np.median(levels))
 
 
+def relaxation_length(
+    x: np.ndarray,
+    P: np.ndarray,
+    x_front: float,
+    x_min: float,
+    P_slab: float,
+    P0: float,
+    tol: float,
+) -> float:
+    """The relaxation zone behind a held front, from its mean profile P_xx(x) (bin centres
+    ``x``, the front at ``x_front``; lengths in the profile's unit): the distance from the
+    front to the farthest bin behind it, down to ``x_min`` (the outflow's gap), whose P
+    differs from the slab's ``P_slab`` by more than ``tol`` of the jump P_slab − P0. Behind
+    it the state is the slab's within the tolerance; a slab that starts nearer the front
+    than this reads the zone. 0 if every bin is within; NaN without a front."""
+    if not np.isfinite(x_front):
+        return float("nan")
+    x, P = np.asarray(x, dtype=float), np.asarray(P, dtype=float)
+    behind = (x < x_front) & (x > x_min) & np.isfinite(P)
+    off = behind & (np.abs(P - P_slab) > tol * abs(P_slab - P0))
+    return float(x_front - x[off].min()) if off.any() else 0.0
+
+
 def jump_residuals(
     rho1: float,
     P1: float,

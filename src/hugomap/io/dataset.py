@@ -75,6 +75,11 @@ POINT_VARS: dict[str, tuple[str, str]] = {
     "ahead_E": ("epsilon", "specific internal energy just ahead of the tracked front"),
     "ahead_u": ("sigma tau^-1", "particle velocity just ahead of the tracked front"),
     "two_wave": ("1", "1 when an elastic precursor runs ahead of the tracked front"),
+    "relaxation_length": (
+        "sigma",
+        "window points: the relaxation zone, the distance behind the front over which the "
+        "mean P_xx differs from the slab's by more than residual_tol of the jump",
+    ),
     "precursor_D": (
         "sigma tau^-1",
         "two waves: the elastic precursor's speed relative to the upstream material (its "

@@ -16,7 +16,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..analysis.shock import bin_edges, measure_point, slab_series, track_front
+from ..analysis.shock import (
+    bin_edges,
+    measure_point,
+    relaxation_length,
+    slab_series,
+    track_front,
+)
 from ..analysis.stats import CorrelatedSlope, slope_scatter
 from ..states import Pole, Profile
 from .methods import OmegaSignal, flat_omega_error
@@ -116,6 +122,21 @@ def _measure(
         front_speed=(L * a, L * se), u_p_from="slab", ahead_gap=ahead_gap,
     )  # fmt: skip
     r["omega_drift"], r["omega_drift_err"] = L * a, L * se
+    # the relaxation zone behind the held front, from the mean profile: a slab nearer the
+    # front than its end reads a state still changing (a crystal's plastic wave)
+    mean = mean_profile(h, profile)
+    lg = gap if left_gap is None else left_gap
+    zone = relaxation_length(mean["x"], mean["P"], float(np.nanmedian(h["front"])) if
+                             np.isfinite(h["front"]).any() else np.nan, g.x_lo + lg,
+                             float(r["P"]), pole.P0, residual_tol)  # fmt: skip
+    r["relaxation_length"] = zone
+    if r["status"] != "ok" and np.isfinite(zone) and zone > gap:
+        r["diagnostic"] = (
+            f"relaxation zone longer than shock.gap: P_xx reaches the slab's within "
+            f"residual_tol of the jump only {zone:.4g} behind the front, the slab starts "
+            f"{gap:.4g} behind it: raise shock.gap past the zone and window.length to hold "
+            f"it; " + str(r["diagnostic"])
+        )
     # the slab's velocity (relative to the upstream) and P_xx per sample: their block
     # errors, checked against replicas, need the series, not only the mean
     slab = slab_series(h, profile, ("u", "P"), gap, avg_length, left_gap)
