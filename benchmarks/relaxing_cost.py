@@ -1,0 +1,247 @@
+"""Cost at equal stated error in a material that relaxes: the moving window against the piston.
+
+A piston's sample must hold the whole distance its front travels, so a point that needs the
+front's structure to settle for a time T_s and then an average over T_a costs
+
+    cpu_piston = c_p · n_x · L_p · (T_s + T_a)/Δt,   L_p = D (T_s + T_a) + l_far,
+
+with c_p the piston's CPU per atom-step, n_x = ρ0 A the atoms per unit length of sample, D the
+shock speed (the sample's far end closes on the front at D in the piston frame, so the
+length the front and the far end use up together is D (T_s + T_a)) and l_far what stays
+ahead at the end (``shock.rear_margin`` and the slab ahead): it grows as T², where a window
+of fixed length grows as T (SEED-en.md; ``benchmarks/window_cost.py`` measures both laws on
+the LJ liquid). T_s is measured on the window itself: the simulated time from the start of the
+piston drive (the window keeps the piston run's clock) to the start of its steady average,
+i.e. loading, the window's settling and the control windows until ω was calm.
+
+Input: the point files of a finished sweep, e.g. of ``config/lj_fcc.yaml``
+(``results/<scene>/up<u>/{amw,mw,dichotomy,piston}.nc`` with the ``loaded.nc`` beside them);
+optionally those of a piston run on a sample long enough to reach the same state
+(``--piston-root``: a second results folder). Each point gives a row:
+
+    case, scheme, u_p, kind ("run" | "extrapolated"), status, cpu_s, sim_time [τ or s],
+    atom_steps, D_rel_err, P_rel_err, T_s, T_a
+
+and for every window point that is ``ok`` an extrapolated piston row at the same T_s and T_a,
+on the assumption that a piston's slab of the same length averaged over the same T_a states
+the same error (a run of ``--piston-root`` checks it: its row stands beside). c_p comes from
+the piston points of the same sweep (their cpu_s over atom_steps), as does n_x (the sample's
+atoms over its length). Then one ``ratio`` row per window point: the piston's CPU over the
+window's.
+
+    python benchmarks/relaxing_cost.py results --case lj_fcc
+    python benchmarks/relaxing_cost.py results --piston-root results_long --case lj_fcc \
+        --out docs/figures
+
+Output: JSON lines on stdout (the machine named in each), the same lines in
+``<out>/relaxing_cost_<case>.jsonl`` and a figure ``<out>/relaxing_cost_<case>.png``: CPU
+against the stated relative error in P, window points and piston points (run and
+extrapolated), with the piston's T² curve over T_a and the window's linear one, and where
+they cross.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+from pathlib import Path
+
+import md_lj  # benchmarks/ is on sys.path when a script here runs
+import numpy as np
+import xarray as xr
+
+WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
+
+
+def _machine() -> str:
+    m = md_lj.machine()
+    return f"{platform.node()} {m['cpu']} {m['nproc']} cpus, {platform.python_version()}"
+
+
+def _scalar(ds: xr.Dataset, k: str) -> float:
+    return float(ds[k]) if k in ds else float("nan")
+
+
+def _drive_start(loaded: Path) -> float:
+    """Simulated time at which the piston started (the loading run's first sample)."""
+    with xr.open_dataset(loaded) as ds:
+        t = ds["hist_t"].values if "hist_t" in ds else np.array([np.nan])
+    return float(t[0]) if t.size else float("nan")
+
+
+def point_row(path: Path, case: str) -> dict | None:
+    """One point file as a row (module docstring); None for a file without a value."""
+    with xr.open_dataset(path) as ds:
+        if "status" not in ds or "D" not in ds:
+            return None
+        scene = json.loads(ds.attrs.get("scene_config", "{}"))
+        t = ds["history_t"].values if "history_t" in ds else np.array([])
+        if "history_stage" in ds:  # the averaged samples: a piston's drive, a window's all
+            t = t[ds["history_stage"].values == 1]
+        row = {
+            "case": case,
+            "scheme": path.stem,
+            "u_p": _scalar(ds, "piston_velocity"),
+            "kind": "run",
+            "status": str(ds["status"].values),
+            "cpu_s": _scalar(ds, "cpu_s"),
+            "atom_steps": _scalar(ds, "atom_steps"),
+            "D": _scalar(ds, "D"),
+            "D_rel_err": _scalar(ds, "D_err") / abs(_scalar(ds, "D")),
+            "P_rel_err": _scalar(ds, "P_err") / abs(_scalar(ds, "P") - _scalar(ds, "P0")),
+            "average_time": _scalar(ds, "average_time"),
+        }
+    loaded = path.with_name("loaded.nc")
+    t0 = _drive_start(loaded) if loaded.exists() else float("nan")
+    if t.size:
+        row["T_s"] = float(t[0] - t0)  # from the piston's start to the steady average
+        row["T_a"] = float(t[-1] - t[0])
+        row["sim_time"] = float(t[-1] - t0)
+    row["_scene"] = scene
+    return row
+
+
+def _sample_line_density(scene: dict) -> float:
+    """Atoms per unit length of an MD sample: 4 per FCC cell of volume 4/ρ0, times the
+    cells across (ρ0 · A) [σ⁻¹]."""
+    s = scene["sample"]
+    a = (4.0 / s["rho0"]) ** (1.0 / 3.0)
+    return 4.0 * s["cells"][1] * s["cells"][2] / a
+
+
+def piston_extrapolated(win: dict, c_p: float, case: str) -> dict:
+    """The piston's CPU for the window point ``win``'s T_s and T_a (module docstring)."""
+    scene = win["_scene"]
+    sh = scene["shock"]
+    T = win["T_s"] + win["T_a"]
+    far = sh["rear_margin"] + 2.0 * (sh.get("ahead_gap") or sh["gap"]) + 3 * sh["bin_width"]
+    L_p = win["D"] * T + far
+    n_x = _sample_line_density(scene)
+    steps = T / sh["dt"]
+    return {
+        "case": case, "scheme": "piston", "u_p": win["u_p"], "kind": "extrapolated",
+        "status": "extrapolated", "cpu_s": c_p * n_x * L_p * steps,
+        "atom_steps": n_x * L_p * steps, "sample_length": L_p, "sim_time": T,
+        "T_s": win["T_s"], "T_a": win["T_a"], "D_rel_err": win["D_rel_err"],
+        "P_rel_err": win["P_rel_err"], "c_p": c_p, "from_scheme": win["scheme"],
+    }  # fmt: skip
+
+
+def crossover_time(win: dict, c_p: float) -> float:
+    """The simulated time T* [τ or s] below which a piston is cheaper than the window point
+    ``win``'s own cost law, cpu_w = (cpu/sim_time) T: c_p n_x (D T* + l_far)/Δt equal to
+    the window's rate per unit simulated time (module docstring's piston law per unit T)."""
+    scene = win["_scene"]
+    sh = scene["shock"]
+    far = sh["rear_margin"] + 2.0 * (sh.get("ahead_gap") or sh["gap"]) + 3 * sh["bin_width"]
+    rate = win["cpu_s"] / win["sim_time"]
+    per_length = c_p * _sample_line_density(scene) / sh["dt"]  # CPU per σ of sample per τ
+    return float((rate / per_length - far) / win["D"])
+
+
+def collect(roots: list[Path], case: str) -> list[dict]:
+    rows = []
+    for root in roots:
+        for path in sorted(root.glob(f"{case}/up*/*.nc")):
+            if path.stem in ("piston", *WINDOW_SCHEMES):
+                r = point_row(path, case)
+                if r is not None:
+                    r["root"] = str(root)
+                    rows.append(r)
+    return rows
+
+
+def _curves(ax, win: dict, c_p: float) -> None:
+    """The window's cost line and the piston's T² curve against T_a, both in terms of the
+    stated relative P error ∝ T_a^(-1/2) from the window point's own."""
+    T_a0, e0 = win["T_a"], win["P_rel_err"]
+    T_a = np.geomspace(0.1 * T_a0, 10 * T_a0, 60)
+    e = e0 * np.sqrt(T_a0 / T_a)
+    rate = win["cpu_s"] / win["sim_time"]  # the window: linear in the simulated time
+    cpu_w = rate * (win["T_s"] + T_a)
+    cpu_p = [piston_extrapolated({**win, "T_a": t}, c_p, "")["cpu_s"] for t in T_a]
+    ax.plot(e, cpu_w, "-", color="C1", lw=1, alpha=0.6)
+    ax.plot(e, cpu_p, "--", color="C0", lw=1, alpha=0.6)
+
+
+def figure(rows: list[dict], case: str, c_p: float, out: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.2, 5.0), layout="constrained")
+    style = {("piston", "run"): ("s", "C0"), ("piston", "extrapolated"): ("D", "none")}
+    for r in rows:
+        if r.get("kind") not in ("run", "extrapolated") or not np.isfinite(r["P_rel_err"]):
+            continue
+        if r["cpu_s"] < 1.0:  # a point that failed before it ran
+            continue
+        marker, face = style.get((r["scheme"], r["kind"]), ("o", "C1"))
+        edge = "C0" if r["scheme"] == "piston" else "C1"
+        ok = r["status"] == "ok"
+        ax.plot(100 * r["P_rel_err"], r["cpu_s"], marker, mfc=face if ok else "none",
+                mec=edge, ms=7)  # fmt: skip
+        ax.annotate(f"{r['u_p']:g}", (100 * r["P_rel_err"], r["cpu_s"]), fontsize=7,
+                    xytext=(3, 3), textcoords="offset points")  # fmt: skip
+    for r in rows:
+        if r.get("kind") == "run" and r["scheme"] in WINDOW_SCHEMES and r["status"] == "ok":
+            _curves(ax, {**r, "P_rel_err": 100 * r["P_rel_err"]}, c_p)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("stated relative error of P − P0 [%]")
+    ax.set_ylabel("CPU of the point [s]")
+    ax.set_title(f"{case}: window (circles, solid) against piston (squares, dashed: T²)",
+                 fontsize=9)  # fmt: skip
+    cross = [r for r in rows if r.get("kind") == "ratio"]
+    note = "".join(f"\nu_p {r['u_p']:g}: piston {r['piston_over_window_cpu']:.1f}x the window;"
+                   f"\n   cheaper only below T = {r['crossover_sim_time']:.0f}"
+                   f" (the window's: {r['window_sim_time']:.0f})" for r in cross)  # fmt: skip
+    ax.text(0.99, 0.99, note.strip(), transform=ax.transAxes, fontsize=7, ha="right",
+            va="top")  # fmt: skip
+    ax.text(0.01, 0.01, "squares: piston run (hollow: not ok)\ndiamonds: piston extrapolated"
+            " (T² law)\ncircles: window (hollow: not ok); labels: u_p",
+            transform=ax.transAxes, fontsize=7)  # fmt: skip
+    path = out / f"relaxing_cost_{case}.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("root", type=Path, help="results folder of the sweep")
+    ap.add_argument("--case", required=True, help="scene name")
+    ap.add_argument("--piston-root", type=Path, help="results folder of a long piston run")
+    ap.add_argument("--out", type=Path, default=Path("results/benchmarks"))
+    args = ap.parse_args()
+    roots = [args.root] + ([args.piston_root] if args.piston_root else [])
+    rows = collect(roots, args.case)
+    pistons = [r for r in rows if r["scheme"] == "piston" and r["atom_steps"] > 0]
+    c_p = (float(np.median([r["cpu_s"] / r["atom_steps"] for r in pistons]))
+           if pistons else float("nan"))  # fmt: skip
+    machine = _machine()
+    out_rows = []
+    for r in rows:
+        out_rows.append(r)
+        if r["scheme"] in WINDOW_SCHEMES and r["status"] == "ok" and np.isfinite(c_p):
+            p = piston_extrapolated(r, c_p, args.case)
+            out_rows.append(p)
+            out_rows.append({"case": args.case, "kind": "ratio", "scheme": r["scheme"],
+                             "u_p": r["u_p"], "piston_over_window_cpu": p["cpu_s"] / r["cpu_s"],
+                             "window_sim_time": r["sim_time"],
+                             "crossover_sim_time": crossover_time(r, c_p)})  # fmt: skip
+    args.out.mkdir(parents=True, exist_ok=True)
+    lines = []
+    for r in out_rows:
+        clean = {k: v for k, v in r.items() if not k.startswith("_")}
+        clean["machine"] = machine
+        lines.append(json.dumps(clean))
+        print(lines[-1], flush=True)
+    (args.out / f"relaxing_cost_{args.case}.jsonl").write_text("\n".join(lines) + "\n")
+    figure(out_rows, args.case, c_p, args.out)
+
+
+if __name__ == "__main__":
+    main()
