@@ -256,7 +256,8 @@ def relaxation_length(
 ) -> float:
     """The relaxation zone behind a held front, from its mean profile P_xx(x) (bin centres
     ``x``, the front at ``x_front``; lengths in the profile's unit): the distance from the
-    front to the farthest bin behind it, down to ``x_min`` (the outflow's gap), whose P
+    front to the farthest bin behind it, down to ``x_min`` (a window: the slab's far end),
+    whose P
     differs from the slab's ``P_slab`` by more than ``tol`` of the jump P_slab − P0. Behind
     it the state is the slab's within the tolerance; a slab that starts nearer the front
     than this reads the zone. 0 if every bin is within; NaN without a front."""

@@ -126,8 +126,9 @@ def _measure(
     # front than its end reads a state still changing (a crystal's plastic wave)
     mean = mean_profile(h, profile)
     lg = gap if left_gap is None else left_gap
-    zone = relaxation_length(mean["x"], mean["P"], float(np.nanmedian(h["front"])) if
-                             np.isfinite(h["front"]).any() else np.nan, g.x_lo + lg,
+    xf = float(np.nanmedian(h["front"])) if np.isfinite(h["front"]).any() else np.nan
+    # down to the slab's far end: what lies behind the slab (the outflow's wake) is not read
+    zone = relaxation_length(mean["x"], mean["P"], xf, max(g.x_lo + lg, xf - gap - avg_length),
                              float(r["P"]), pole.P0, residual_tol)  # fmt: skip
     r["relaxation_length"] = zone
     if r["status"] != "ok" and np.isfinite(zone) and zone > gap:
