@@ -29,9 +29,9 @@ the piston points of the same sweep (their cpu_s over atom_steps), as does n_x (
 atoms over its length). Then one ``ratio`` row per window point: the piston's CPU over the
 window's.
 
-    python benchmarks/relaxing_cost.py results --case lj_fcc
-    python benchmarks/relaxing_cost.py results --piston-root results_long --case lj_fcc \
-        --out docs/figures
+    python benchmarks/relaxing_cost.py results_lj_fcc --case lj_fcc_strong
+    python benchmarks/relaxing_cost.py results_a results_b --piston-root results_long \
+        --case lj_fcc --out docs/figures
 
 Output: JSON lines on stdout (the machine named in each), the same lines in
 ``<out>/relaxing_cost_<case>.jsonl`` and a figure ``<out>/relaxing_cost_<case>.png``: CPU
@@ -211,12 +211,12 @@ def figure(rows: list[dict], case: str, c_p: float, out: Path) -> Path:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("root", type=Path, help="results folder of the sweep")
+    ap.add_argument("root", type=Path, nargs="+", help="results folders of the sweep(s)")
     ap.add_argument("--case", required=True, help="scene name")
     ap.add_argument("--piston-root", type=Path, help="results folder of a long piston run")
     ap.add_argument("--out", type=Path, default=Path("results/benchmarks"))
     args = ap.parse_args()
-    roots = [args.root] + ([args.piston_root] if args.piston_root else [])
+    roots = list(args.root) + ([args.piston_root] if args.piston_root else [])
     rows = collect(roots, args.case)
     pistons = [r for r in rows if r["scheme"] == "piston" and r["atom_steps"] > 0]
     c_p = (float(np.median([r["cpu_s"] / r["atom_steps"] for r in pistons]))
