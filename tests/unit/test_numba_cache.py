@@ -76,3 +76,68 @@ def test_a_users_numba_cache_dir_wins_for_every_kernel(tmp_path: Path) -> None:
     assert any(n.startswith("ideal_gas.pressure-") for n in found), found
     assert any(n.startswith("user_kernels.double-") for n in found), found
     assert not (tmp_path / "xdg").exists()
+
+
+RACE = """
+import os, sys, time
+from hugomap.numba_conf import cache_dir
+from numba.core import caching
+
+key, hold_index, hold_data, start, go = sys.argv[1:6]
+folder = os.path.join(cache_dir(), "race")
+os.makedirs(folder, exist_ok=True)
+# numba's save: read the index, pick a free data-file number, write the index, write the
+# data; each step held back here so that two saves interleave as two compiling processes can
+load_index, save_data = caching.IndexDataCacheFile._load_index, caching.IndexDataCacheFile._save_data
+def slow_load(self):
+    out = load_index(self)
+    time.sleep(float(hold_index))
+    return out
+def slow_save(self, name, data):
+    time.sleep(float(hold_data))
+    save_data(self, name, data)
+caching.IndexDataCacheFile._load_index = slow_load
+caching.IndexDataCacheFile._save_data = slow_save
+f = caching.IndexDataCacheFile(folder, "kernel", "stamp")
+open(go + "." + key, "w").close()  # imported and ready
+while not os.path.exists(go):
+    time.sleep(0.01)
+time.sleep(float(start))
+f.save(key, "code of " + key)
+"""
+
+
+def test_concurrent_saves_keep_each_signature_with_its_own_code(tmp_path: Path) -> None:
+    """Two processes save different signatures into one kernel's cache at once, their
+    steps interleaved by holding each back (the comments below): each signature must load
+    its own code. Without the folder's lock (``numba_conf._locked``) both pick
+    ``kernel.1.nbc``, the index ends naming it for one signature while the file holds the
+    other's code (the mismatch that segfaulted a loaded kernel)."""
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path / "xdg")}
+    env.pop("NUMBA_CACHE_DIR", None)
+    script = tmp_path / "race.py"
+    script.write_text(RACE)
+    import time
+
+    go = str(tmp_path / "go")
+    # both imported; each reads the index and holds 0.6 s before writing it, the second
+    # starting 0.3 s later (so it too reads no entry), and the first holds its data write
+    # 0.6 s more: the index ends as the second wrote it, the data file as the first did
+    first = subprocess.Popen([sys.executable, str(script), "A", "0.6", "0.6", "0", go], env=env)
+    second = subprocess.Popen([sys.executable, str(script), "B", "0.6", "0", "0.3", go], env=env)
+    deadline = time.time() + 60
+    while not all(Path(f"{go}.{k}").exists() for k in "AB") and time.time() < deadline:
+        time.sleep(0.01)
+    Path(go).touch()
+    assert first.wait(60) == 0 and second.wait(60) == 0
+    check = (
+        "import os, json\n"
+        "from hugomap.numba_conf import cache_dir\n"
+        "from numba.core import caching\n"
+        "f = caching.IndexDataCacheFile(os.path.join(cache_dir(), 'race'), 'kernel', 'stamp')\n"
+        "print(json.dumps({k: f.load(k) for k in ('A', 'B')}))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", check], env=env, capture_output=True,
+                         text=True, check=True).stdout  # fmt: skip
+    loaded = json.loads(out)
+    assert loaded == {"A": "code of A", "B": "code of B"}, loaded
