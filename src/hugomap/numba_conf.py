@@ -10,7 +10,6 @@ Set ``NUMBA_DISABLE_JIT=1`` to run every kernel as plain Python (the unit tests 
 
 from __future__ import annotations
 
-import fcntl
 import functools
 import hashlib
 import os
@@ -81,38 +80,6 @@ class HugomapCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheL
 # decorates its kernels, which is when numba picks a locator).
 if HugomapCacheLocator not in caching.CacheImpl._locator_classes:
     caching.CacheImpl._locator_classes.insert(0, HugomapCacheLocator)
-
-
-def _locked(method):
-    """``method`` of numba's ``IndexDataCacheFile`` under an exclusive ``flock`` on its
-    folder's ``.lock``, for hugomap's cache folder only. The rule: one process at a time
-    reads or writes an index and its data files. numba's ``save`` reads the index, picks
-    the first free data-file number and writes both; two processes compiling at once (four
-    pytest workers, two Snakemake jobs) both picked ``<kernel>.1.nbc`` for different
-    signatures, so an index entry pointed at another signature's machine code, and loading
-    it segfaulted."""
-
-    @functools.wraps(method)
-    def wrapper(self, *args, **kwargs):
-        folder = str(self._cache_path)
-        if not folder.startswith(cache_dir()):
-            return method(self, *args, **kwargs)
-        os.makedirs(folder, exist_ok=True)
-        with open(os.path.join(folder, ".lock"), "a") as fh:
-            fcntl.flock(fh, fcntl.LOCK_EX)
-            try:
-                return method(self, *args, **kwargs)
-            finally:
-                fcntl.flock(fh, fcntl.LOCK_UN)
-
-    wrapper._hugomap_locked = True
-    return wrapper
-
-
-for _name in ("save", "load"):
-    _m = getattr(caching.IndexDataCacheFile, _name)
-    if not getattr(_m, "_hugomap_locked", False):
-        setattr(caching.IndexDataCacheFile, _name, _locked(_m))
 
 FASTMATH: set[str] = {"nsz", "arcp", "contract", "afn", "reassoc"}
 JIT_FLAGS: dict = {"cache": True, "fastmath": FASTMATH, "error_model": "numpy", "nogil": True}
