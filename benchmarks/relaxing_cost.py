@@ -51,6 +51,8 @@ import md_lj  # benchmarks/ is on sys.path when a script here runs
 import numpy as np
 import xarray as xr
 
+from hugomap.keys import MIN_SLAB_BINS
+
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
 
 
@@ -110,12 +112,19 @@ def _sample_line_density(scene: dict) -> float:
     return 4.0 * s["cells"][1] * s["cells"][2] / a
 
 
+def _room_ahead(sh: dict) -> float:
+    """What a piston run leaves ahead of its front at the end: ``shock.rear_margin`` and the
+    slab ahead, 2 ``shock.ahead_gap`` (default ``shock.gap``) + ``MIN_SLAB_BINS`` bins."""
+    gap = sh.get("ahead_gap") or sh["gap"]
+    return sh["rear_margin"] + 2.0 * gap + MIN_SLAB_BINS * sh["bin_width"]
+
+
 def piston_extrapolated(win: dict, c_p: float, case: str) -> dict:
     """The piston's CPU for the window point ``win``'s T_s and T_a (module docstring)."""
     scene = win["_scene"]
     sh = scene["shock"]
     T = win["T_s"] + win["T_a"]
-    far = sh["rear_margin"] + 2.0 * (sh.get("ahead_gap") or sh["gap"]) + 3 * sh["bin_width"]
+    far = _room_ahead(sh)
     L_p = win["D"] * T + far
     n_x = _sample_line_density(scene)
     steps = T / sh["dt"]
@@ -134,7 +143,7 @@ def crossover_time(win: dict, c_p: float) -> float:
     the window's rate per unit simulated time (module docstring's piston law per unit T)."""
     scene = win["_scene"]
     sh = scene["shock"]
-    far = sh["rear_margin"] + 2.0 * (sh.get("ahead_gap") or sh["gap"]) + 3 * sh["bin_width"]
+    far = _room_ahead(sh)
     rate = win["cpu_s"] / win["sim_time"]
     per_length = c_p * _sample_line_density(scene) / sh["dt"]  # CPU per σ of sample per τ
     return float((rate / per_length - far) / win["D"])
