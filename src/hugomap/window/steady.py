@@ -92,7 +92,32 @@ def steady_state(
         if len(t) >= n_max or not unresolved(r, residual_tol):
             break
     r["average_time"] = float(len(t) * step)
+    _relaxation_zone(r, h, profile, pole, g.x_lo, gap, avg_length, residual_tol, left_gap)
     return r, h
+
+
+def _relaxation_zone(
+    r: dict, h: dict[str, np.ndarray], profile: Profile, pole: Pole, x_lo: float, gap: float,
+    avg_length: float, residual_tol: float, left_gap: float | None,
+) -> None:  # fmt: skip
+    """Store the relaxation zone behind the held front (``relaxation_length``, from the mean
+    profile of the whole average) in the point ``r``, and name it first in the diagnostic of
+    a point that is not ok when it is longer than ``gap``: a slab nearer the front than the
+    zone's end reads a state still changing (a crystal's plastic wave)."""
+    mean = mean_profile(h, profile)
+    lg = gap if left_gap is None else left_gap
+    xf = float(np.nanmedian(h["front"])) if np.isfinite(h["front"]).any() else np.nan
+    # down to the slab's far end: what lies behind the slab (the outflow's wake) is not read
+    zone = relaxation_length(mean["x"], mean["P"], xf, max(x_lo + lg, xf - gap - avg_length),
+                             float(r["P"]), pole.P0, residual_tol)  # fmt: skip
+    r["relaxation_length"] = zone
+    if r["status"] != "ok" and np.isfinite(zone) and zone > gap:
+        r["diagnostic"] = (
+            f"relaxation zone longer than shock.gap: P_xx reaches the slab's within "
+            f"residual_tol of the jump only {zone:.4g} behind the front, the slab starts "
+            f"{gap:.4g} behind it: raise shock.gap past the zone and window.length to hold "
+            f"it; " + str(r["diagnostic"])
+        )
 
 
 def _measure(
@@ -122,22 +147,6 @@ def _measure(
         front_speed=(L * a, L * se), u_p_from="slab", ahead_gap=ahead_gap,
     )  # fmt: skip
     r["omega_drift"], r["omega_drift_err"] = L * a, L * se
-    # the relaxation zone behind the held front, from the mean profile: a slab nearer the
-    # front than its end reads a state still changing (a crystal's plastic wave)
-    mean = mean_profile(h, profile)
-    lg = gap if left_gap is None else left_gap
-    xf = float(np.nanmedian(h["front"])) if np.isfinite(h["front"]).any() else np.nan
-    # down to the slab's far end: what lies behind the slab (the outflow's wake) is not read
-    zone = relaxation_length(mean["x"], mean["P"], xf, max(g.x_lo + lg, xf - gap - avg_length),
-                             float(r["P"]), pole.P0, residual_tol)  # fmt: skip
-    r["relaxation_length"] = zone
-    if r["status"] != "ok" and np.isfinite(zone) and zone > gap:
-        r["diagnostic"] = (
-            f"relaxation zone longer than shock.gap: P_xx reaches the slab's within "
-            f"residual_tol of the jump only {zone:.4g} behind the front, the slab starts "
-            f"{gap:.4g} behind it: raise shock.gap past the zone and window.length to hold "
-            f"it; " + str(r["diagnostic"])
-        )
     # the slab's velocity (relative to the upstream) and P_xx per sample: their block
     # errors, checked against replicas, need the series, not only the mean
     slab = slab_series(h, profile, ("u", "P"), gap, avg_length, left_gap)
