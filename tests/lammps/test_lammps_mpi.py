@@ -34,7 +34,7 @@ import sys
 import numpy as np
 from hugomap.io.atomic import mpi_rank
 from hugomap.lammps.simulation import LammpsSimulation
-from hugomap.md.sample import fcc_positions, maxwell_velocities
+from hugomap.particles.fcc import fcc_positions, maxwell_velocities
 
 model = {"units": "lj", "pair_style": "lj/cut 2.5", "pair_coeff": ["* * 1.0 1.0"],
          "pair_modify": ["shift yes"], "mass": 1.0, "skin": 0.3}

@@ -24,7 +24,7 @@ Noise that sets the tolerances, measured on this box:
   Bounds: ρ0 0.5 %, T0 2 %, P0 3 %, E0 0.05 ε: about 2–3 of those spreads, while a virial
   of the wrong sign or units or an unshifted potential (E0 off by 0.4 ε) fails them (an
   unsized box, ρ0 −0.25 % on this one, does not: tests/physics/test_sample_pole.py checks
-  the sizing on a 30-cell box, and this backend runs the same ``md.sample.size_bulk``).
+  the sizing on a 30-cell box, and this backend runs the same ``particles.sizing.size_bulk``).
   Seen on this box, four seeds each: LAMMPS's T0 0.2 % below MD's (1.9955 against 2.0001
   mean), P0 0.8 % (5.934 against 5.982), E0 0.009 ε lower: well inside the bounds, and not
   the far wall's kind (soft here, specular in MD): with a reflecting far wall LAMMPS gave

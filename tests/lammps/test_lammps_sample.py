@@ -1,5 +1,5 @@
 """The LAMMPS backend's prepared sample: the box sized to the bulk density (the MD
-backend's ``md.sample.size_bulk`` driving LAMMPS) and the pole at the request.
+backend's ``particles.sizing.size_bulk`` driving LAMMPS) and the pole at the request.
 
 The box and bounds of ``tests/physics/test_sample_pole.py`` (cells [30, 4, 4]: 1,920 atoms,
 L_x ≈ 51 σ, the default 10 τ thermostat and 6 τ NVE pole; about 15 s): the walls' excess
@@ -68,7 +68,7 @@ def test_langevin_damps_a_crystals_sound_wave_that_csvr_keeps() -> None:
     decayed (the fundamental by e^(−π c t/L_x) ≈ e^(−5)) to the noise. 1.5 and 3 times the
     noise are the bounds; measured 4.2 (CSVR) and 1.1 (Langevin) times the noise."""
     from hugomap.lammps.simulation import LammpsSimulation
-    from hugomap.md.sample import fcc_positions, maxwell_velocities
+    from hugomap.particles.fcc import fcc_positions, maxwell_velocities
 
     model = validate_config({"scenes": {"t": copy.deepcopy(LIQUID)}})["scenes"]["t"]["model"]
     x, L = fcc_positions((20, 4, 4), 1.1)

@@ -37,7 +37,7 @@ def _scene() -> dict:
 
 def _sim(frozen: int = 0, cells=(6, 4, 4)):
     from hugomap.lammps.simulation import LammpsSimulation
-    from hugomap.md.sample import fcc_positions, maxwell_velocities
+    from hugomap.particles.fcc import fcc_positions, maxwell_velocities
 
     x, L = fcc_positions(cells, 0.8)
     v = maxwell_velocities(x.shape[0], 2.0, 3)
@@ -197,8 +197,8 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
     from hugomap.lammps.simulation import LammpsSimulation
     from hugomap.lammps.window import LammpsKit
     from hugomap.md.reservoir import make_reservoir
-    from hugomap.md.sample import fcc_positions, maxwell_velocities
     from hugomap.md.window import MDWindow
+    from hugomap.particles.fcc import fcc_positions, maxwell_velocities
 
     cu = {"solver": "lammps", "phase": "crystal", "schemes": ["piston"],
           "model": {"units": "metal", "pair_style": "eam/alloy",

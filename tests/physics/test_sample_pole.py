@@ -1,4 +1,4 @@
-"""The prepared MD sample's bulk is at the requested pole (``md.sample.size_bulk``).
+"""The prepared MD sample's bulk is at the requested pole (``particles.sizing.size_bulk``).
 
 A small liquid box (cells [30, 4, 4]: 1,920 atoms, L_x ≈ 51 σ) between two walls, the
 default preparation (10 τ thermostat, 6 τ NVE pole), seeds 1–4. Tolerances, from this box:
@@ -88,7 +88,7 @@ def test_liquid_sample_is_at_one_temperature_along_x() -> None:
     [120, 4, 4], seeds 1 and 2: +1.9 and +6.7 %): the contact layers that form at the walls
     while the liquid settles release energy there, the global thermostat removes it from
     everywhere, and heat needs hundreds of τ to cross 40 σ. With the local thermostat
-    (``md.sample.flatten_temperature``): +0.9 %. The statistical error of the ratio is about
+    (``particles.sizing.flatten_temperature``): +0.9 %. The statistical error of the ratio is about
     0.35 % (3,400 atoms near the walls, about 20 independent samples in 4 τ); the bound,
     2 %, is over 5 of them from the local thermostat's value and 1.5 % below the global one's.
     """

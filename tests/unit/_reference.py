@@ -13,7 +13,7 @@ import contextlib
 import numba
 import numpy as np
 
-from hugomap.md.sample import fcc_positions
+from hugomap.particles.fcc import fcc_positions
 
 #: True when the kernels run as plain Python (``NUMBA_DISABLE_JIT=1``): long runs are shortened.
 NO_JIT = bool(numba.config.DISABLE_JIT)

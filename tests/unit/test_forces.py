@@ -15,9 +15,9 @@ import pytest
 from hugomap.md.forces import energy_virial_full, forces_full, forces_half
 from hugomap.md.neighbor import grid_shape, half_from_full
 from hugomap.md.potential import LJParams
-from hugomap.md.sample import maxwell_velocities
 from hugomap.md.simulation import MDSimulation
 from hugomap.md.state import MDState
+from hugomap.particles.fcc import maxwell_velocities
 
 from . import _reference as ref
 from ._reference import EPS

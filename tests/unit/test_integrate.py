@@ -329,7 +329,7 @@ def test_csvr_thermostat_reaches_target():
 
 class _Slabs:
     """Two 10-σ slabs of mobile atoms between walls at 0 and 20 σ (duck-typed for
-    ``md.sample.flatten_temperature``), the left at temperature 1, the right at 3, each
+    ``particles.sizing.flatten_temperature``), the left at temperature 1, the right at 3, each
     with its own mean velocity."""
 
     def __init__(self) -> None:
@@ -360,7 +360,7 @@ def test_local_thermostat_moves_each_slab_towards_T0_and_keeps_its_momentum():
     """``flatten_temperature`` (Berendsen weak coupling per slab): with Δt/τ = 1 each slab
     lands on T0 exactly (λ² = T0/T_b); with Δt/τ = 0.1 the gap T_b − T0 shrinks to
     T0 + 0.9 (T_b − T0) (λ² T_b); every slab's momentum is unchanged (rounding)."""
-    from hugomap.md.sample import flatten_temperature
+    from hugomap.particles.sizing import flatten_temperature
 
     for frac, expect in ((1.0, (2.0, 2.0)), (0.1, (2.0 - 0.9, 2.0 + 0.9))):
         s = _Slabs()

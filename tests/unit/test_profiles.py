@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from hugomap.md.potential import LJParams
-from hugomap.md.profiles import SUM_FIELDS, bin_sums, fields_from_sums
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation
+from hugomap.particles.profiles import SUM_FIELDS, bin_sums, fields_from_sums
 
 from ._reference import EPS
 

@@ -1,7 +1,7 @@
 """The frame of a snapshot's velocities in its comment line (``io.extxyz.VelocityFrame``:
 ``velocity_frame``, ``frame_velocity``, a window's ``x_lo``, ``x_hi``), read back raw and by
 ASE; the CSPH backend's piston and window snapshots; the MD and LAMMPS rule
-(``md.snapshot.velocity_frame``).
+(``particles.snapshot.velocity_frame``).
 
 References: the extended-XYZ comment line as the spec defines it (key=value pairs; here
 split on spaces outside quotes), ASE's reader (``atoms.info``); and the frames' physics:
@@ -145,7 +145,7 @@ def test_md_rule_piston_run_window_and_si_view():
     from hugomap.md.potential import LJParams
     from hugomap.md.sample import fcc_state
     from hugomap.md.simulation import MDSimulation
-    from hugomap.md.snapshot import velocity_frame
+    from hugomap.particles.snapshot import velocity_frame
 
     sim = MDSimulation(fcc_state((4, 4, 4), 0.8, 1.0, 3, periodic_x=False), LJParams(), 0.004)
     MD.start_piston(sim, {"shock": {"dt": 0.004}}, 2.0)

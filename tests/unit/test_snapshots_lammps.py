@@ -64,7 +64,7 @@ def test_md_snapshot_read_by_ase(sim, tmp_path):
     assert atoms.info["velocity_frame"] == "piston"
     assert atoms.info["frame_velocity"] == pytest.approx(-s.walls0[3], abs=1e-12)
     # Per-atom P_xx averages to the profile's P_xx in every bin; e to its e.
-    from hugomap.md.profiles import fields_from_sums
+    from hugomap.particles.profiles import fields_from_sums
 
     prof = fields_from_sums(sim.profile_sums(1.0), s.L[1] * s.L[2] * 1.0)
     b = np.floor(s.x[:, 0]).astype(int)

@@ -94,7 +94,7 @@ class PerAtomAccess:
 
 
 class StateView:
-    """The attributes of ``md.state.MDState`` that ``md.sample.size_bulk`` and the moving
+    """The attributes of ``md.state.MDState`` that ``particles.sizing.size_bulk`` and the moving
     window (``md.window.MDWindow``) read and write, on a ``LammpsSimulation``, in the order
     of its per-atom arrays: ``x``, ``v`` (on one rank live views; on several, copies: a change
     takes effect when assigned back, ``state.v = v``, as ``state.v *= λ`` does), ``f``, ``ids`` (hugomap labels, a copy), ``L``, ``n`` (every

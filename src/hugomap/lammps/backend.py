@@ -19,15 +19,15 @@ scene):
   copper), tabulated as the CSPH backend tabulates its EOS's (``linear_reference``).
 
 The sample is
-the MD backend's: an FCC lattice (``md.sample.fcc_positions``, Maxwell velocities at T0)
+the MD backend's: an FCC lattice (``particles.fcc.fcc_positions``, Maxwell velocities at T0)
 between a reflecting wall at x = 0 and a one-sided harmonic wall at L_x, y and z periodic,
-equilibrated with a CSVR thermostat (LAMMPS ``fix temp/csvr``) while ``md.sample.size_bulk``
+equilibrated with a CSVR thermostat (LAMMPS ``fix temp/csvr``) while ``particles.sizing.size_bulk``
 sizes a fluid's box so its bulk is at ρ0 and ends at the canonical mean energy of T0; then
 an NVE run measures the pole away from the walls (block averages, ``analysis.stats``).
 The piston runs in the MD backend's frame (drift removed, every atom at −u_p, the piston
 wall at rest, the far wall moving at −u_p with the upstream material), so u_p is exact and
 the shared analysis (``window.piston``, ``analysis.shock.measure_point``) measures the point
-from the profile sums (``md.profiles.SUM_FIELDS``, read by the MD backend's ``MDProfile``).
+from the profile sums (``particles.profiles.SUM_FIELDS``, read by the MD backend's ``MDProfile``).
 
 The moving-window schemes (AMW, MW, the dichotomy) run the MD backend's window,
 ``md.window.MDWindow``, over LAMMPS simulations (``lammps.window.LammpsKit``: frozen atoms
@@ -111,7 +111,7 @@ class MetalProfile:
         T    = ΣK_aa / (3 (c − 1) k_B)                                    [K]
         E    = (½ ΣK_aa + Σpe) / c            [eV/atom] → · eV/(m u_kg)    [J/kg]
 
-    (the MD backend's ``md.profiles`` formulas with the mass and the unit factors)."""
+    (the MD backend's ``particles.profiles`` formulas with the mass and the unit factors)."""
 
     x0 = 0.0
 
@@ -213,7 +213,7 @@ class LammpsBackend:
     # -- sample and checkpoints ------------------------------------------------------------
     def prepare(self, scene: dict) -> tuple[Any, Pole, dict[str, Any]]:
         """FCC at (ρ0, T0) between the walls, thermostatted (CSVR) for
-        ``sample.equilibrate_time`` while ``md.sample.size_bulk`` sizes the box (a fluid:
+        ``sample.equilibrate_time`` while ``particles.sizing.size_bulk`` sizes the box (a fluid:
         L_x stretched so the bulk, ``WALL_LAYER`` from the walls, is at ρ0; a crystal keeps
         its lattice) and ends at the canonical mean energy of T0 (a crystal: first
         ``equilibrate_time`` under a Langevin thermostat, ``run_langevin``, then half
@@ -232,7 +232,8 @@ class LammpsBackend:
         that pressure (``lattice.pole_pressure_problem``): a pole off it leaves the
         simulation's ``check`` set, and ``save`` writes the sample with status
         ``pole_off_pressure``."""
-        from ..md.sample import fcc_positions, maxwell_velocities, size_bulk
+        from ..particles.fcc import fcc_positions, maxwell_velocities
+        from ..particles.sizing import size_bulk
         from .lattice import searched
         from .lattice_search import search_lattice
         from .simulation import LammpsSimulation
@@ -397,7 +398,7 @@ class LammpsBackend:
 
     def profile(self, solver, scene: dict, info: dict | None = None):
         """The MD backend's reader (``md.backend.MDProfile``): bins from x = 0 across
-        L_y L_z, fields by ``md.profiles.fields_from_sums`` (units lj, m = 1); the bins'
+        L_y L_z, fields by ``particles.profiles.fields_from_sums`` (units lj, m = 1); the bins'
         width ``lattice.bin_width`` (``shock.bin_width``, scaled with a searched lattice)."""
         from ..md.backend import MDProfile
 
@@ -546,7 +547,7 @@ class LammpsBackend:
         if not scene["shock"].get("snapshots", True):
             return
         from ..io.extxyz import format_frame, snapshot_paths, write_extxyz
-        from ..md.snapshot import velocity_frame
+        from ..particles.snapshot import velocity_frame
         from .simulation import native
 
         frame = velocity_frame(solver)  # looks through an SI view to the native units

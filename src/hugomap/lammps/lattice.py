@@ -45,7 +45,7 @@ its mean stress (P_xx + 2 P_yy)/3 (P_zz = P_yy by the symmetry of a cubic crysta
 checked; either one off ends its stage with status ``pole_off_pressure``.
 
 Walls. The sample stands between a reflecting wall at x = 0 and a harmonic one at L_x with its
-outer (100) planes a/4 inside them (``md.sample.fcc_positions``), so its faces along x are
+outer (100) planes a/4 inside them (``particles.fcc.fcc_positions``), so its faces along x are
 free: a crystal under a positive pressure at its lattice expands uniaxially into that gap
 until it presses on both walls, which relieves P_xx by C11 ΔL/L_x and P_yy by C12 ΔL/L_x (the
 strain ΔL/L_x, C11 and C12 the elastic constants); at its zero-pressure lattice it touches

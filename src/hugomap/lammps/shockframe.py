@@ -161,12 +161,12 @@ def rayleigh_errors(
 
 class FrameBox:
     """A fully periodic LAMMPS box of the scene's model (``simulation.model_commands``): FCC
-    (``md.sample.fcc_positions``) at the number density ``rho_n`` [σ⁻³ | Å⁻³], velocities
+    (``particles.fcc.fcc_positions``) at the number density ``rho_n`` [σ⁻³ | Å⁻³], velocities
     at T0 [ε/k_B | K] (LAMMPS ``velocity create``, zero total momentum), time step ``dt``."""
 
     def __init__(self, model: dict, cells: tuple[int, int, int], rho_n: float, T0: float,
                  dt: float, seed: int) -> None:  # fmt: skip
-        from ..md.sample import fcc_positions
+        from ..particles.fcc import fcc_positions
         from .simulation import lammps_class, model_commands
 
         x, L = fcc_positions(tuple(int(c) for c in cells), rho_n)

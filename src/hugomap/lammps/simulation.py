@@ -50,7 +50,7 @@ labels are kept beside them (``_labels``), since LAMMPS ids must be positive.
 
 Per-atom energy (``compute pe/atom pair``) and virial (``compute stress/atom NULL pair``,
 which is −W per atom in pressure·volume units, i.e. ε for units lj; W_aa = Σ_pairs ½ r_a
-F_a, so P_aa = (K_aa + Σ W_aa)/V as ``md.profiles`` reads it) are current after every
+F_a, so P_aa = (K_aa + Σ W_aa)/V as ``particles.profiles`` reads it) are current after every
 ``run``: ``thermo 0`` prints (to nowhere) on a run's last step, which schedules every
 per-atom compute on that step (checked: they equal a ``run 0`` re-evaluation to 1e-14).
 A run skips LAMMPS's set-up (``pre no``) unless a command or a moved atom needs it.
@@ -287,7 +287,7 @@ class LammpsSimulation(PerAtomAccess):
             self._cmds(["unfix hm_csvr", "uncompute hm_temp"])
         self._T_bath = None if value is None else float(value)
         if value is not None:
-            # 3N degrees of freedom (no momentum conservation between walls), as md.sample
+            # 3N degrees of freedom (no momentum conservation between walls), as particles.sizing
             self._cmds([
                 "compute hm_temp hm_mobile temp", "compute_modify hm_temp extra/dof 0",
                 f"fix hm_csvr all temp/csvr {_f(value)} {_f(value)} {_f(self.tau_bath)} "
@@ -422,7 +422,7 @@ class LammpsSimulation(PerAtomAccess):
 
     def scale_x(self, factor: float) -> None:
         """Stretch x affinely by ``factor`` (atoms, L_x, the right wall; static walls with the
-        left one at 0): ``md.sample.size_bulk``'s resize."""
+        left one at 0): ``particles.sizing.size_bulk``'s resize."""
         w = self.walls0
         if w[0] != 0.0 or w[1] != 0.0 or w[3] != 0.0:
             raise ValueError("scale_x needs static walls, the left one at x = 0")
@@ -458,12 +458,12 @@ class LammpsSimulation(PerAtomAccess):
         return float(self._v()[self._mobile(), 0].mean())
 
     def profile_sums(self, width: float) -> np.ndarray:
-        """Raw per-bin sums (nbins, 11) in ``md.profiles.SUM_FIELDS`` order over slabs of
+        """Raw per-bin sums (nbins, 11) in ``particles.profiles.SUM_FIELDS`` order over slabs of
         ``width`` [σ | Å] from x = 0 to L_x: count, Σv_a, Σv_a², Σpe, ΣW_aa in the native
         units (velocities [σ/τ | Å/ps], energies [ε | eV]; no mass: the reader multiplies),
         of the mobile atoms (a frozen partner's share of a pair's energy and virial is not
         counted, as in the MD backend)."""
-        from ..md.profiles import SUM_FIELDS, bin_sums
+        from ..particles.profiles import SUM_FIELDS, bin_sums
 
         nbins = int(math.floor(self.L[0] / width + 1e-9))
         pe, vir = self.per_atom_energy_virial()
@@ -480,7 +480,7 @@ class LammpsSimulation(PerAtomAccess):
 
     @property
     def state(self) -> StateView:
-        """The view of the state ``md.sample.size_bulk``, ``bulk_density`` and the moving
+        """The view of the state ``particles.sizing.size_bulk``, ``bulk_density`` and the moving
         window (``md.window.MDWindow``) read."""
         return StateView(self)
 

@@ -3,7 +3,7 @@
 ``si.WindowSIView``.
 
 ``LammpsKit`` is what ``MDWindow`` and ``md.reservoir.make_reservoir`` need beyond the
-simulation's interface (``md.kit.ParticleKit``): the domain and the reservoir are LAMMPS
+simulation's interface (``particles.kit.ParticleKit``): the domain and the reservoir are LAMMPS
 instances of the scene's own model (``model``), the reservoir a fully periodic box
 (``LammpsSimulation(periodic_x=True)``) of the scene's FCC lattice at (ρ0, T0) under
 LAMMPS's CSVR thermostat, so the inflow of an EAM copper scene is EAM copper. Its checkpoint
@@ -32,7 +32,7 @@ SCALE = {"lj": 1.0, "metal": 2.0}
 
 
 class LammpsKit:
-    """``md.kit.ParticleKit`` for LAMMPS: ``model`` is the scene's validated ``model``
+    """``particles.kit.ParticleKit`` for LAMMPS: ``model`` is the scene's validated ``model``
     block (None: only for loading a checkpoint, which carries its model)."""
 
     window_kind: CheckpointKind = LAMMPS_WINDOW_CHECKPOINT
@@ -65,7 +65,7 @@ class LammpsKit:
     ) -> LammpsSimulation:  # fmt: skip
         """The scene's FCC lattice at ρ0 [σ⁻³ | Å⁻³], Maxwell velocities at T0 (variance
         k_B T0/(m mvv2e)), periodic in x, y, z, under ``fix temp/csvr`` at T0 [ε/k_B | K]."""
-        from ..md.sample import fcc_positions, maxwell_velocities
+        from ..particles.fcc import fcc_positions, maxwell_velocities
 
         x, L = fcc_positions(cells, rho0)
         v = maxwell_velocities(x.shape[0], self.kT(T0) / self.m_kin, seed)
@@ -82,7 +82,7 @@ class LammpsKit:
     def bulk_fields(self, run: LammpsSimulation, L: np.ndarray) -> tuple[float, float, float]:
         """(P_xx, (P_yy + P_zz)/2 [ε σ⁻³ | eV Å⁻³], T [ε/k_B | K]) of a periodic box of
         volume V: K_aa = m mvv2e (Σv_a² − c ū_a²), P_aa = (K_aa + ΣW_aa)/V, T = ΣK_aa/(3 (c
-        − 1) k_B) (``md.profiles`` with the mass and k_B)."""
+        − 1) k_B) (``particles.profiles`` with the mass and k_B)."""
         s = run.profile_sums(float(L[0]))[0]
         c = s[0]
         ubar = s[1:4] / c

@@ -47,7 +47,7 @@ def lj(scene: dict):
 
 class MDProfile:
     """Profile reader of an MD run: bins of ``bin_width`` [σ] from x = 0 across the transverse
-    ``area`` [σ²]; fields by ``md.profiles.fields_from_sums`` (n is also the mass density,
+    ``area`` [σ²]; fields by ``particles.profiles.fields_from_sums`` (n is also the mass density,
     m = 1)."""
 
     x0 = 0.0
@@ -65,7 +65,7 @@ class MDProfile:
             return sums[:, 1] / c, c
 
     def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
-        from .profiles import fields_from_sums
+        from ..particles.profiles import fields_from_sums
 
         f = fields_from_sums(summed[None, :], self.area * self.bin_width * n_bins)
         return SlabState(rho=float(f["n"][0]), u=float(f["ux"][0]), P=float(f["Pxx"][0]),
@@ -128,7 +128,7 @@ def md_frame(solver, scene: dict, tags: dict) -> str:
     x_lo = min(float(xs.min()), xl, xr, 0.0)
     x_hi = max(float(xs.max()), xl, xr, x_lo + width)
     from ..io.extxyz import format_frame
-    from .snapshot import velocity_frame
+    from ..particles.snapshot import velocity_frame
 
     return format_frame(
         s.x, np.array([x_hi - x_lo, s.L[1], s.L[2]]), velocities=s.v, masses=1.0,
@@ -164,15 +164,16 @@ class MDBackend:
     def prepare(self, scene: dict) -> tuple[Any, Pole, dict[str, Any]]:
         """FCC at (ρ0, T0) (or the atoms of ``sample.data_file``, a LAMMPS data file) between
         two static walls, thermostatted (CSVR, and slab by slab along x:
-        ``md.sample.flatten_temperature``) for ``equilibrate_time`` while
-        ``md.sample.size_bulk`` sizes the box so that the bulk, ``WALL_LAYER`` from the walls,
-        is at ρ0 (a fluid: L_x = cells·a less the walls' excess layer, about 0.2 % for the
+        ``particles.sizing.flatten_temperature``) for ``equilibrate_time`` while
+        ``particles.sizing.size_bulk`` sizes the box so that the bulk, ``WALL_LAYER`` from the
+        walls, is at ρ0 (a fluid: L_x = cells·a less the walls' excess layer, about 0.2 % for the
         default liquid; a crystal keeps its lattice) and ends at the canonical mean energy of
         T0; then run without thermostat for ``pole_time`` while the pole is measured away
         from the walls: ρ0, P0 = P_xx, E0, T0, P_yy0 (block averages with standard errors).
         The sample info is what ``size_bulk`` did (``length_x`` [σ], ``x_scale``, the bulk
         density and energies it measured), for the record."""
-        from .sample import initial_state, size_bulk
+        from ..particles.sizing import size_bulk
+        from .sample import initial_state
         from .simulation import MDSimulation
 
         s = scene["sample"]

@@ -1,13 +1,10 @@
-"""What the moving window (``md.window.MDWindow``) and its inflow reservoir
-(``md.reservoir.make_reservoir``) need to know of a particle backend beyond the simulation's own
-interface (``ParticleKit``), and that knowledge for the numba MD backend (``MDKit``);
-``lammps.window.LammpsKit`` is LAMMPS's.
+"""What the moving window and its inflow reservoir need to know of the numba MD backend
+(``MDKit``, a ``particles.kit.ParticleKit``); ``lammps.window.LammpsKit`` is LAMMPS's.
 """
 
 from __future__ import annotations
 
 import os
-from typing import Protocol
 
 import numpy as np
 import xarray as xr
@@ -18,50 +15,7 @@ from .sample import fcc_state
 from .simulation import MDSimulation
 from .state import MDState
 
-__all__ = ["MDKit", "ParticleKit"]
-
-
-class ParticleKit(Protocol):
-    """What ``MDWindow`` and ``make_reservoir`` need to know of a particle backend beyond
-    the simulation's own interface (module docstring), in the simulation's units:
-    ``window_kind`` (its window checkpoint kind), ``units`` (the names of its length and
-    velocity units), ``scale`` (the length the set-up's fixed lengths are counted in; σ),
-    ``m_kin`` (K = ½ m_kin Σ v²)."""
-
-    window_kind: CheckpointKind
-    units: tuple[str, str]
-    scale: float
-    m_kin: float
-
-    def rc(self, sim) -> float:
-        """The cutoff of ``sim``'s model."""
-
-    def rlist(self) -> float:
-        """Cutoff plus neighbour skin."""
-
-    def kT(self, T: float) -> float:
-        """k_B T in energy units."""
-
-    def reservoir(self, cells: tuple[int, int, int], rho0: float, T0: float, dt: float,
-                  seed: int, tau_bath: float):  # fmt: skip
-        """A fully periodic FCC box at (ρ0, T0) under a thermostat."""
-
-    def periodic(self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float):
-        """A fully periodic NVE box of these atoms."""
-
-    def bulk_fields(self, run, L: np.ndarray) -> tuple[float, float, float]:
-        """(P_xx, (P_yy + P_zz)/2, T) of a periodic box."""
-
-    def domain(self, like, x: np.ndarray, v: np.ndarray, ids: np.ndarray, L: np.ndarray,
-               walls0: np.ndarray):  # fmt: skip
-        """The window's domain (walls along x), with the clock and time step of ``like``."""
-
-    def load(self, ds: xr.Dataset, source: str | os.PathLike | None):
-        """The simulation of a verified window checkpoint."""
-
-    def skip_force_rows(self, sim, n: int) -> None:
-        """Let ``sim`` skip the force on the frozen atoms with ids −1 … −n (the inflow copy),
-        where it can without changing the mobile atoms' motion."""
+__all__ = ["MDKit"]
 
 
 class MDKit:
@@ -105,7 +59,7 @@ class MDKit:
 
     def bulk_fields(self, run: MDSimulation, L: np.ndarray) -> tuple[float, float, float]:
         """(P_xx, (P_yy + P_zz)/2, T) of a periodic box: one bin over all of it."""
-        from .profiles import fields_from_sums
+        from ..particles.profiles import fields_from_sums
 
         f = fields_from_sums(run.profile_sums(float(L[0])), float(np.prod(L)))
         return float(f["Pxx"][0]), 0.5 * float(f["Pyy"][0] + f["Pzz"][0]), float(f["T"][0])

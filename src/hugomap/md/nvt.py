@@ -27,8 +27,9 @@ import numpy as np
 
 from ..analysis import stats
 from ..failures import SolverUnstable
+from ..particles.fcc import maxwell_velocities
 from .potential import LJParams
-from .sample import fcc_state, maxwell_velocities
+from .sample import fcc_state
 from .simulation import MDSimulation
 from .state import MDState
 

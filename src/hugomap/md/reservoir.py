@@ -2,7 +2,7 @@
 feeds in (``make_reservoir``), chosen among candidates by its energy and, for a fluid, by the
 flow it leaves in the material it feeds (``InflowScreen``, ``inflow_drift``: the seam
 disturbance is each snapshot's own). Any particle backend, through its kit
-(``md.kit.ParticleKit``), in the simulation's units.
+(``particles.kit.ParticleKit``), in the simulation's units.
 """
 
 from __future__ import annotations

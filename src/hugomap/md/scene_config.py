@@ -16,7 +16,7 @@ from ..keys import MIN_SLAB_BINS, duplicate_point_tags, window_ahead_room
 
 #: Relative tolerance of a data file's L_x against cells·a [-]: a prepared liquid sample is
 #: shorter by the walls' excess layer 2Γ/ρ0 (0.2 % of the default liquid, 0.6 % of a
-#: 30-cell box; ``md.sample.size_bulk``).
+#: 30-cell box; ``particles.sizing.size_bulk``).
 DATA_LX_TOL = 0.01
 
 #: The piston's slab keeps this far from the piston by default [σ]. The layers its start
@@ -37,7 +37,7 @@ def lattice_constant(rho: float) -> float:
 
 def box_lengths(smp: dict) -> list[float]:
     """The sample's box cells·a [σ] along x, y, z (a prepared liquid is shorter in x by the
-    walls' excess layer, 0.2 % of the default liquid: ``md.sample.size_bulk``)."""
+    walls' excess layer, 0.2 % of the default liquid: ``particles.sizing.size_bulk``)."""
     a = lattice_constant(smp["rho0"])
     return [c * a for c in smp["cells"]]
 
@@ -150,7 +150,7 @@ def _check_data_file(base: str, smp: dict, L: list[float]) -> list[str]:
     (readable, atom_style atomic, no frozen atoms), whose box is the one ``sample.cells``
     and ``sample.rho0`` describe (L = cells·a, a = (4/ρ0)^(1/3): L_y, L_z to 1e-6 relative,
     L_x to ``DATA_LX_TOL``, since a prepared sample's box is shorter than cells·a by the
-    walls' excess layer, ``md.sample.size_bulk``, and may be exported and read back) and
+    walls' excess layer, ``particles.sizing.size_bulk``, and may be exported and read back) and
     which holds 4·nx·ny·nz atoms (so ρ0 is its density): the cost model, the window's
     inflow and the reference read these keys."""
     from .sample import data_state

@@ -22,11 +22,11 @@ from ..failures import SolverUnstable
 from ..io.atomic import write_netcdf
 from ..io.checkpoint import MD_CHECKPOINT, read_checkpoint, seal_checkpoint, verify_checkpoint
 from ..numba_conf import num_threads
+from ..particles.profiles import SUM_FIELDS, bin_sums
 from . import integrate as ig
 from .forces import energy_virial_full
 from .neighbor import build_full_list, cell_of, counting_sort, grid_shape
 from .potential import LJParams
-from .profiles import SUM_FIELDS, bin_sums
 from .state import MDState
 
 
@@ -270,7 +270,7 @@ class MDSimulation:
         L_x → factor·L_x, the walls at factor times their positions (static walls only);
         velocities are kept. The list is rebuilt (sorted, on the new cell grid) and the
         forces recomputed, so the next step is a plain velocity-Verlet step of the stretched
-        system. For a box closed in x by walls (``md.sample.size_bulk``)."""
+        system. For a box closed in x by walls (``particles.sizing.size_bulk``)."""
         s = self.state
         if s.periodic[0] or s.walls0[1] != 0.0 or s.walls0[3] != 0.0:
             raise ValueError("scale_x needs a box closed in x by two static walls")

@@ -1,0 +1,12 @@
+"""What the two particle backends share: numba MD (``hugomap.md``) and LAMMPS
+(``hugomap.lammps``) stand side by side on this package, and it imports neither.
+
+- ``fcc``: an FCC lattice and Maxwell velocities (a sample's, a reservoir's first state);
+- ``sizing``: the equilibration between walls that sizes a sample's box (``size_bulk``);
+- ``profiles``: the per-bin sums (``bin_sums``, the one binning kernel) and the fields
+  made of them;
+- ``kit``: what the window and the reservoir need of a backend (``ParticleKit``);
+- ``snapshot``: the frame of a snapshot's velocities (``velocity_frame``).
+
+Everything is in the simulation's own units (reduced LJ units, or LAMMPS's).
+"""
