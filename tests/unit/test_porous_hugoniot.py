@@ -20,6 +20,8 @@ import pytest
 from hugomap.analysis.porous import (
     COPPER,
     MGSolid,
+    partial_compaction_from_up,
+    pore_collapse_distention,
     porous_hugoniot_from_up,
     porous_hugoniot_from_volume,
     porous_hugoniot_pressure,
@@ -128,3 +130,46 @@ def test_bad_arguments_are_refused():
         porous_hugoniot_from_volume(1.1 * COPPER.V0, 1.35)
     with pytest.raises(ValueError, match="gamma0"):
         MGSolid(8930.0, 3940.0, 1.49, -1.0)
+
+
+# The partial-compaction state: its bisection runs 200 halvings of a bracket below 1/s, far
+# past one ulp of η, so it meets the closed forms to the same few ulp (RTOL); volume
+# differences lose the same digits as above (RTOL_DV).
+def test_partial_compaction_at_full_compaction_is_mcqueen():
+    for alpha0 in (1.1, 1.35):
+        a = porous_hugoniot_from_up(UP, alpha0)
+        b = partial_compaction_from_up(UP, alpha0, 1.0)
+        for name in ("D", "P", "V", "E", "eta"):
+            np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=RTOL_DV)
+
+
+@pytest.mark.parametrize(("alpha", "tau"), [(1.02, 0.0), (1.05, 7.0e7), (1.2, 0.0)])
+def test_partial_compaction_closes_the_jump_on_the_herrmann_surface(alpha, tau):
+    up = UP[UP >= 100.0]
+    st = partial_compaction_from_up(up, 1.35, alpha, deviator=tau)
+    V00, rho00 = 1.35 * COPPER.V0, COPPER.rho0 / 1.35
+    np.testing.assert_allclose(rho00 * st.D, st.rho * (st.D - st.u_p), rtol=RTOL_DV)
+    np.testing.assert_allclose(st.E, 0.5 * st.P * (V00 - st.V), rtol=RTOL_DV)
+    # The matrix on the solid's Mie–Grüneisen surface at V_s = V/α, its mean stress over α,
+    # plus the slab's deviator (Herrmann's P–α form).
+    c, eta = COPPER, st.eta
+    np.testing.assert_allclose(st.V, alpha * c.V0 * (1.0 - eta), rtol=RTOL)
+    PH = c.rho0 * c.c0**2 * eta / (1.0 - c.s * eta) ** 2
+    Ps = PH + c.gamma0 / c.V0 * (st.E - 0.5 * PH * c.V0 * eta)
+    np.testing.assert_allclose(st.P, Ps / alpha + tau, rtol=RTOL_DV)
+    # Pores left open make the shocked state less dense, so the front is faster at equal u_p.
+    assert np.all(st.D > porous_hugoniot_from_up(up, 1.35).D)
+
+
+def test_pore_collapse_distention_hand_values():
+    # Carroll & Holt: P = k ln(α/(α − 1)) with k = Y/√3 (2D) or (2/3) Y (3D); at P = k ln 2
+    # the pores hold α = 2, whatever Y.
+    Y = 1.2e8
+    assert pore_collapse_distention(Y / np.sqrt(3.0) * np.log(2.0), Y, 2) == pytest.approx(2.0)
+    assert pore_collapse_distention(2.0 / 3.0 * Y * np.log(2.0), Y, 3) == pytest.approx(2.0)
+    with pytest.raises(ValueError):
+        pore_collapse_distention(-1.0, Y, 2)
+    with pytest.raises(ValueError, match="below the initial distention"):
+        partial_compaction_from_up(100.0, 1.35, 1.4)
+    with pytest.raises(ValueError, match="too weak"):
+        partial_compaction_from_up(10.0, 1.35, 1.05, deviator=8.0e7)

@@ -292,3 +292,79 @@ def snowplow_hugoniot(u_p: np.ndarray | float, alpha: float, rho_solid: float) -
         rho00=rho_solid / alpha,
         eta=np.zeros(u.shape),
     )
+
+
+def partial_compaction_from_up(
+    u_p: np.ndarray | float,
+    alpha0: float,
+    alpha: float,
+    solid: MGSolid = COPPER,
+    deviator: float = 0.0,
+) -> HugoniotState:
+    """The porous Hugoniot state at particle velocity u_p [m/s] whose slab keeps distention
+    ``alpha`` (1 ≤ alpha < alpha0): pores partly open behind the front, the matrix on the
+    solid's Mie–Grüneisen surface (Herrmann's P–α form, W. Herrmann, J. Appl. Phys. 40,
+    2490, 1969: the mean stress of a porous body is the matrix's over α, a pore carrying none).
+
+    With the matrix at compression η = 1 − V_s/V0 and V = α V_s, the jump conditions from
+    the pole at rest (V00 = α0 V0, P0 = 0) give E = ½ u_p² and
+
+        (P_s(η, E)/α + τ) · (V00 − V) = u_p²,   V00 − V = V0 (α0 − α + α η),
+        P_s = P_H(η) + (Γ0/V0)(E − ½ P_H V0 η)    (the module doc's EOS),
+
+    τ = ``deviator`` [Pa] the slab's mean deviatoric part of P_xx = −σ_xx (0 without
+    strength; a yielding matrix in uniaxial strain carries at most (2/3) Y/α). Solved for η
+    by bisection; then D = u_p V00/(V00 − V), P = ρ00 D u_p, E = ½ u_p². At alpha = 1 and
+    τ = 0 it is ``porous_hugoniot_from_up`` (McQueen's full compaction). The state's ``eta``
+    is the matrix's compression. u_p must be strong enough that the pores' closing alone
+    takes more than u_p² of work per unit (V00 − V): else ValueError."""
+    alpha0, alpha = _check_alpha(alpha0), _check_alpha(alpha)
+    if alpha >= alpha0:
+        raise ValueError(f"alpha = {alpha:g} must be below the initial distention {alpha0:g}")
+    u = np.asarray(u_p, dtype=np.float64)
+    if np.any(~np.isfinite(u)) or np.any(u <= 0):
+        raise ValueError("u_p must be finite and > 0 (m/s)")
+    V0, g = solid.V0, solid.gamma0 / solid.V0
+    E = 0.5 * u * u
+
+    def f(eta: np.ndarray) -> np.ndarray:
+        P_H = compression_state(eta, solid.rho0, solid.c0, solid.s)[0]
+        Ps = P_H + g * (E - 0.5 * P_H * V0 * eta)
+        return (Ps / alpha + deviator) * V0 * (alpha0 - alpha + alpha * eta) - u * u
+
+    shape = np.broadcast(u).shape
+    lo, hi = np.zeros(shape), np.full(shape, 0.5 / solid.s)
+    if np.any(f(lo) >= 0):
+        raise ValueError(
+            f"u_p = {u_p!r} m/s: too weak for a compaction wave to alpha = {alpha:g} with a "
+            f"deviator of {deviator:.3g} Pa (the matrix would stay uncompressed)"
+        )
+    while np.any(f(hi) <= 0):  # P_H diverges as η → 1/s
+        hi = np.where(f(hi) <= 0, 0.5 * (hi + 1.0 / solid.s), hi)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        pos = f(mid) > 0
+        hi, lo = np.where(pos, mid, hi), np.where(pos, lo, mid)
+    eta = 0.5 * (lo + hi)
+    dV = V0 * (alpha0 - alpha + alpha * eta)
+    V = alpha * V0 * (1.0 - eta)
+    D = u * alpha0 * V0 / dV
+    rho00 = solid.rho0 / alpha0
+    return HugoniotState(u_p=u * np.ones(shape), D=D, P=rho00 * D * u, V=V, rho=1.0 / V, E=E,
+                         alpha=alpha0, rho00=rho00, eta=eta)  # fmt: skip
+
+
+def pore_collapse_distention(P: float, yield_stress: float, dim: int = 2) -> float:
+    """The distention α that a perfectly plastic matrix (yield stress Y [Pa]) holds at mean
+    pressure P [Pa] when its pores collapse quasi-statically (M. M. Carroll and A. C. Holt,
+    J. Appl. Phys. 43, 1626, 1972):
+
+        spherical pores (3D):           P = (2/3) Y ln(α/(α − 1)),
+        cylindrical pores, plane strain: P = (Y/√3) ln(α/(α − 1))   (2D),
+
+    so α = 1/(1 − exp(−P/k)), k = (2/3) Y or Y/√3. A static estimate: in a shock the pores'
+    inertia and the matrix's heating close them further, so it bounds α from above."""
+    if not (P > 0 and yield_stress > 0) or dim not in (2, 3):
+        raise ValueError("P and yield_stress must be > 0 Pa and dim 2 or 3")
+    k = (2.0 / 3.0) * yield_stress if dim == 3 else yield_stress / math.sqrt(3.0)
+    return 1.0 / (1.0 - math.exp(-P / k))

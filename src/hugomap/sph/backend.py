@@ -210,6 +210,7 @@ class CSPHBackend:
             u_behind=u_p, u_ahead=0.0, x_origin=info["x_lo"],
             load_distance=sh["load_fraction"] * L, rear_margin=(1.0 - sh["end_fraction"]) * L,
             max_time=sh["max_time"], sample_every=sh["sample_every"], far_end=info["x_hi"],
+            ahead_gap=sh.get("ahead_gap"),
         )  # fmt: skip
 
     def profile(self, solver, scene: dict, info: dict) -> SPHProfile:
@@ -298,7 +299,7 @@ class CSPHBackend:
         avg = w.get("average_time") or 2.0 * wt
         sh = scene["shock"]
         return ControlParams.from_window(w, window.geom.length, sh["gap"], sh["avg_length"],
-                                         times=(wt, avg))  # fmt: skip
+                                         times=(wt, avg), ahead_gap=sh.get("ahead_gap"))  # fmt: skip
 
     def reference_inputs(self, scene: dict) -> None:
         """None: the model's Hugoniot is computed per scene in milliseconds."""
