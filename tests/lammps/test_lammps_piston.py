@@ -29,8 +29,8 @@ Noise that sets the tolerances, measured on this box:
   mean), P0 0.8 % (5.934 against 5.982), E0 0.009 ε lower: well inside the bounds, and not
   the far wall's kind (soft here, specular in MD): with a reflecting far wall LAMMPS gave
   T0 1.9926 and 2.0017 (seeds 1, 2), as wide a spread as the offset.
-- The AMW window point on LAMMPS (``md.window.MDWindow`` over LAMMPS, cut from the LAMMPS
-  loading checkpoint; window 50 σ, settle 6 τ, steady average 8 τ; about 50 s): its D is
+- The AMW window point on LAMMPS (``particles.window.ParticleWindow`` over LAMMPS, cut from
+  the LAMMPS loading checkpoint; window 50 σ, settle 6 τ, steady average 8 τ; about 50 s): its D is
   L⟨dω/dt⟩ − u_in over the average, whose error (the ω slope's, correlated samples, and its
   scatter over four spans) is the front's wander over 8 τ: measured 10.667 ± 0.143 σ/τ
   (1.3 %) against the MD piston's 10.753 (seed 1). Reference: that MD piston point; the

@@ -118,8 +118,8 @@ def window(tmp_path_factory):
     middle), its reservoir made by LAMMPS, run through inflow releases and outflow cuts."""
     from hugomap.lammps.backend import BACKEND
     from hugomap.lammps.window import LammpsKit
-    from hugomap.md.reservoir import make_reservoir
-    from hugomap.md.window import MDWindow
+    from hugomap.particles.reservoir import make_reservoir
+    from hugomap.particles.window import ParticleWindow
 
     sc = _scene()
     sim = _sim(cells=(20, 4, 4))
@@ -127,9 +127,9 @@ def window(tmp_path_factory):
     sim.dt = DT
     sim.advance(100)
     kit = LammpsKit(sc["model"])
-    res, pole = make_reservoir((4, 4), 0.8, 2.0, None, DT, 5, 0.3, n_candidates=8, every=10,
-                               pole_time=0.5, kit=kit)  # fmt: skip
-    win = MDWindow.from_piston(sim, res, x_front=17.0, u_p=2.0, D_guess=10.7, length=14.0,
+    res, pole = make_reservoir(kit, (4, 4), 0.8, 2.0, DT, 5, 0.3, n_candidates=8, every=10,
+                               pole_time=0.5)  # fmt: skip
+    win = ParticleWindow.from_piston(sim, res, x_front=17.0, u_p=2.0, D_guess=10.7, length=14.0,
                                front_fraction=0.5, ghost_width=3.0, cut_every=2.0,
                                sync_steps=25, kit=kit)  # fmt: skip
     n0 = win.next_id
@@ -196,9 +196,9 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
     from hugomap.lammps.si import WindowSIView
     from hugomap.lammps.simulation import LammpsSimulation
     from hugomap.lammps.window import LammpsKit
-    from hugomap.md.reservoir import make_reservoir
-    from hugomap.md.window import MDWindow
     from hugomap.particles.fcc import fcc_positions, maxwell_velocities
+    from hugomap.particles.reservoir import make_reservoir
+    from hugomap.particles.window import ParticleWindow
 
     cu = {"solver": "lammps", "phase": "crystal", "schemes": ["piston"],
           "model": {"units": "metal", "pair_style": "eam/alloy",
@@ -218,10 +218,10 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
     METAL_BACKEND.start_piston(METAL_BACKEND.view(sim), sc, 1000.0)
     sim.advance(20)
     kit = LammpsKit(sc["model"])
-    res, pole = make_reservoir((4, 4), sc["sample"]["rho0"], 300.0, None, 0.001, 2, 0.05,
-                               0.05, n_candidates=4, every=10, pole_time=0.1, kit=kit)  # fmt: skip
+    res, pole = make_reservoir(kit, (4, 4), sc["sample"]["rho0"], 300.0, 0.001, 2, 0.05,
+                               0.05, n_candidates=4, every=10, pole_time=0.1)  # fmt: skip
     assert res.n_particles == 4 * 8 * 4 * 4  # 8 cells: L_r = 28.9 Å >= 4 (rc + skin)
-    win = MDWindow.from_piston(sim, res, x_front=25.0, u_p=10.0, D_guess=54.0, length=16.0,
+    win = ParticleWindow.from_piston(sim, res, x_front=25.0, u_p=10.0, D_guess=54.0, length=16.0,
                                front_fraction=0.5, ghost_width=6.0, cut_every=4.0,
                                sync_steps=25, crystal=True, lattice=3.615, kit=kit)  # fmt: skip
     view = METAL_BACKEND.window_view(win)
@@ -254,8 +254,8 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
 
 
 def test_the_inflow_screen_runs_on_lammps_as_on_the_numba_md() -> None:
-    """``md.reservoir.inflow_drift`` through ``LammpsKit``: one snapshot, made by LAMMPS, fed as
-    a uniform flow (V = 10.7 σ/τ) through a 14-σ window by LAMMPS and by the numba MD (the
+    """``particles.reservoir.inflow_drift`` through ``LammpsKit``: one snapshot, made by LAMMPS,
+    fed as a uniform flow (V = 10.7 σ/τ) through a 14-σ window by LAMMPS and by the numba MD (the
     same truncated-and-shifted LJ, velocity Verlet at the same dt). Measured: −0.0489 ±
     0.043 σ/τ by both, equal to 1e-5 over these 6.4 τ (the two integrations stay together);
     the bound asks only the statistical agreement, 3 of their combined block errors
@@ -265,11 +265,11 @@ def test_the_inflow_screen_runs_on_lammps_as_on_the_numba_md() -> None:
     from hugomap.lammps.window import LammpsKit
     from hugomap.md.kit import MDKit
     from hugomap.md.potential import LJParams
-    from hugomap.md.reservoir import InflowScreen, inflow_drift, make_reservoir
+    from hugomap.particles.reservoir import InflowScreen, inflow_drift, make_reservoir
 
     kit = LammpsKit(_scene()["model"])
-    res, _ = make_reservoir((4, 4), 0.8, 2.0, None, DT, 5, 0.3, n_candidates=4, every=10,
-                            pole_time=0.5, kit=kit)  # fmt: skip
+    res, _ = make_reservoir(kit, (4, 4), 0.8, 2.0, DT, 5, 0.3, n_candidates=4, every=10,
+                            pole_time=0.5)  # fmt: skip
     screen = InflowScreen(10.7, 2.0, 9.0, 3.0, 2.0, 25, 4.0, 1, 0.001)
     du_l, err_l = inflow_drift(kit, res, screen)
     md = MDKit(LJParams(rc=2.5, shift=True, skin=0.3))

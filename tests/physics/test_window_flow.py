@@ -26,11 +26,12 @@ import pytest
 
 from hugomap.analysis.shock import bin_edges, slab_state
 from hugomap.md.backend import MDProfile
+from hugomap.md.kit import MDKit
 from hugomap.md.potential import LJParams
-from hugomap.md.reservoir import make_reservoir
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation
 from hugomap.md.window import MDWindow
+from hugomap.particles.reservoir import make_reservoir
 
 RHO0, T0 = 0.8, 2.0
 
@@ -56,7 +57,7 @@ def flow(request):
     sim = MDSimulation(sample, LJ, DT, T_bath=T0, tau_bath=0.2, seed=5)
     sim.advance(1500)  # melt and equilibrate (3 tau)
     sim.T_bath = None
-    res, pole = make_reservoir((4, 4), RHO0, T0, LJ, DT, seed=6, equilibrate_time=3.0)
+    res, pole = make_reservoir(MDKit(LJ), (4, 4), RHO0, T0, DT, seed=6, equilibrate_time=3.0)
     win = MDWindow.from_piston(
         sim, res, x_front=19.0, u_p=0.0, D_guess=V, length=24.0, front_fraction=0.5,
         ghost_width=3.0, cut_every=2.0, sync_steps=25, inflow=inflow,
@@ -177,8 +178,8 @@ def test_the_seams_excess_work_returned_leaves_a_subsonic_flow_at_the_pole():
     sim = MDSimulation(sample, LJ, DT, T_bath=T0, tau_bath=0.2, seed=5)
     sim.advance(1500)
     sim.T_bath = None
-    res, pole = make_reservoir((5, 5), RHO0, T0, LJ, DT, seed=105, equilibrate_time=3.0,
-                               min_length=40.0)  # fmt: skip
+    res, pole = make_reservoir(MDKit(LJ), (5, 5), RHO0, T0, DT, seed=105,
+                               equilibrate_time=3.0, min_length=40.0)  # fmt: skip
     win = MDWindow.from_piston(
         sim, res, x_front=19.0, u_p=0.0, D_guess=6.0, length=24.0, front_fraction=0.5,
         ghost_width=3.0, cut_every=2.0, sync_steps=25, inflow="live", seam_work="returned",

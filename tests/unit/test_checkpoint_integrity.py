@@ -32,7 +32,8 @@ from hugomap.io.checkpoint import (
 from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation
-from hugomap.md.window import MDWindow, WindowGeometry
+from hugomap.md.window import MDWindow
+from hugomap.particles.window import WindowGeometry
 from hugomap.registry import backend_named
 from hugomap.stages import piston as piston_stage
 from hugomap.stages.files import history_of

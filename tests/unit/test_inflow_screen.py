@@ -1,5 +1,5 @@
-"""The inflow reservoir's screen (``md.reservoir.make_reservoir`` with an ``InflowScreen``): which
-candidate snapshot it keeps.
+"""The inflow reservoir's screen (``particles.reservoir.make_reservoir`` with an
+``InflowScreen``): which candidate snapshot it keeps.
 
 The flow each candidate feeds in (``inflow_drift``, a uniform-flow window run) is replaced
 here by a scripted one, so the rule itself is what is tested: candidates are tried nearest
@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import hugomap.md.reservoir as mdw
+import hugomap.particles.reservoir as mdw
+from hugomap.md.kit import MDKit
 from hugomap.md.potential import LJParams
 
 LJ = LJParams(rc=2.5, shift=True, skin=0.3)
@@ -31,9 +32,9 @@ def _reservoir(screen, drifts=None, monkeypatch=None):
             return drifts[len(seen) - 1], 0.001
 
         monkeypatch.setattr(mdw, "inflow_drift", fake)
-    snap, pole = mdw.make_reservoir((4, 4), 0.8, 2.0, LJ, 0.002, seed=3, equilibrate_time=0.02,
-                                    n_candidates=6, every=2, pole_time=0.01,
-                                    E0_target=-2.0, screen=screen)  # fmt: skip
+    snap, pole = mdw.make_reservoir(MDKit(LJ), (4, 4), 0.8, 2.0, 0.002, seed=3,
+                                    equilibrate_time=0.02, n_candidates=6, every=2,
+                                    pole_time=0.01, E0_target=-2.0, screen=screen)  # fmt: skip
     return snap, pole, seen
 
 

@@ -13,11 +13,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from hugomap.md.kit import MDKit
 from hugomap.md.potential import LJParams
-from hugomap.md.reservoir import make_reservoir
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation
-from hugomap.md.window import MDWindow, WindowGeometry, _inflow_copy
+from hugomap.md.window import MDWindow
+from hugomap.particles.reservoir import make_reservoir
+from hugomap.particles.window import WindowGeometry, _inflow_copy
 
 LJ = LJParams(rc=2.5, shift=True, skin=0.3)
 DT = 0.002
@@ -56,7 +58,7 @@ def window():
     sim = MDSimulation(sample, LJ, DT, T_bath=2.0, tau_bath=0.2, seed=5)
     sim.advance(500)
     sim.T_bath = None
-    res, _ = make_reservoir((4, 4), 0.8, 2.0, LJ, DT, seed=6, equilibrate_time=0.5,
+    res, _ = make_reservoir(MDKit(LJ), (4, 4), 0.8, 2.0, DT, seed=6, equilibrate_time=0.5,
                             min_length=34.0)  # fmt: skip
     win = MDWindow.from_piston(
         sim, res, x_front=25.0, u_p=0.0, D_guess=8.0, length=20.0, front_fraction=0.5,

@@ -152,7 +152,7 @@ def test_md_rule_piston_run_window_and_si_view():
     frame = velocity_frame(sim)
     assert frame == VelocityFrame("piston", 2.0)
     assert np.mean(sim.state.v[:, 0]) + frame.velocity == pytest.approx(0.0, abs=1e-12)
-    # a window (``MDWindow``'s u_in, geom, sim) and an SI view of it: the native window's
+    # a window (``ParticleWindow``'s u_in, geom, sim) and an SI view of it: the native window's
     geom = SimpleNamespace(x_lo=3.0, x_hi=78.0)
     window = SimpleNamespace(u_in=-7.5, u_out=-5.5, geom=geom, sim=sim)
     view = SimpleNamespace(u_in=-7.5e2, geom=SimpleNamespace(x_lo=3e-10, x_hi=7.8e-9), sim=window)

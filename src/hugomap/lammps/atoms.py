@@ -94,9 +94,9 @@ class PerAtomAccess:
 
 
 class StateView:
-    """The attributes of ``md.state.MDState`` that ``particles.sizing.size_bulk`` and the moving
-    window (``md.window.MDWindow``) read and write, on a ``LammpsSimulation``, in the order
-    of its per-atom arrays: ``x``, ``v`` (on one rank live views; on several, copies: a change
+    """The attributes of ``md.state.MDState`` that ``particles.sizing.size_bulk`` and the
+    moving window (``particles.window.ParticleWindow``) read and write, on a
+    ``LammpsSimulation``, in the order of its per-atom arrays: ``x``, ``v`` (on one rank live views; on several, copies: a change
     takes effect when assigned back, ``state.v = v``, as ``state.v *= λ`` does), ``f``, ``ids`` (hugomap labels, a copy), ``L``, ``n`` (every
     atom, frozen too), ``periodic``, ``walls0`` (the simulation's array), ``time``,
     ``step``, ``ref_velocity`` (kept, unused: LAMMPS decides its own list rebuilds) and

@@ -29,8 +29,9 @@ wall at rest, the far wall moving at −u_p with the upstream material), so u_p 
 the shared analysis (``window.piston``, ``analysis.shock.measure_point``) measures the point
 from the profile sums (``particles.profiles.SUM_FIELDS``, read by the MD backend's ``MDProfile``).
 
-The moving-window schemes (AMW, MW, the dichotomy) run the MD backend's window,
-``md.window.MDWindow``, over LAMMPS simulations (``lammps.window.LammpsKit``: frozen atoms
+The moving-window schemes (AMW, MW, the dichotomy) run the particle window the MD backend
+runs, ``particles.window.ParticleWindow``, over LAMMPS simulations
+(``lammps.window.LammpsKit``: frozen atoms
 as LAMMPS type 2 under ``fix nve/noforce``, the outflow face a rigidly moving harmonic
 wall, the inflow a reservoir made by LAMMPS with the scene's model); units metal's window is
 seen in SI through ``si.WindowSIView``, and ``control_params`` gives the stages
@@ -357,14 +358,14 @@ class LammpsBackend:
         return self.view(LammpsSimulation.from_dataset(ds, source))
 
     def load_window(self, ds: xr.Dataset, source: str | os.PathLike | None = None):
-        """A window from a verified ``hugomap-lammps-window/1`` checkpoint (``MDWindow``
+        """A window from a verified ``hugomap-lammps-window/1`` checkpoint (``ParticleWindow``
         over a new LAMMPS instance; ``CheckpointError`` naming ``source`` otherwise), as the
         methods see it (``window_view``)."""
-        from ..md.window import MDWindow
+        from ..particles.window import ParticleWindow
         from .window import LammpsKit
 
         kit = LammpsKit(None, units=str(ds.attrs.get("lammps_units", "lj")))
-        return self.window_view(MDWindow.from_dataset(ds, source, kit))
+        return self.window_view(ParticleWindow.from_dataset(ds, source, kit))
 
     # -- the piston ------------------------------------------------------------------------
     def start_piston(self, solver, scene: dict, u_p: float) -> None:
@@ -410,14 +411,14 @@ class LammpsBackend:
         D_guess: float, pole: Pole, info: dict,
     ) -> WindowStart:  # fmt: skip
         """The MD backend's window (``MDBackend.open_window``: the reservoir at the pole,
-        its snapshot screened, ``MDWindow.from_piston``, the settling, ω) on LAMMPS, the
-        reservoir made by LAMMPS with the scene's model (``md.reservoir.make_reservoir``
+        its snapshot screened, ``ParticleWindow.from_piston``, the settling, ω) on LAMMPS, the
+        reservoir made by LAMMPS with the scene's model (``particles.reservoir.make_reservoir``
         through ``window.LammpsKit``). ``front``,
         ``u_p``, ``D_guess`` arrive in the frame's units (metal: SI) and are converted to
         the simulation's; the returned window, pole and ω are in the frame's. A crystal's
         reservoir and seam are at the sample's lattice (``_lattice_density``)."""
-        from ..md.reservoir import inflow_screen, make_reservoir
-        from ..md.window import MDWindow
+        from ..particles.reservoir import inflow_screen, make_reservoir
+        from ..particles.window import ParticleWindow
         from ..window.methods import OmegaSignal
         from .simulation import native
         from .window import LammpsKit
@@ -429,15 +430,15 @@ class LammpsBackend:
         rho_n, e_n = self._native_pole(scene, pole)
         rho_c = rho_n if fluid else self._lattice_density(scene, info, pole)
         res, inflow = make_reservoir(
-            (s["cells"][1], s["cells"][2]), rho_c, s["T0"], None,
+            kit, (s["cells"][1], s["cells"][2]), rho_c, s["T0"],
             sim.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"], s["thermostat_tau"],
-            E0_target=e_n if fluid else None, kit=kit, min_length=w["reservoir_length"],
+            E0_target=e_n if fluid else None, min_length=w["reservoir_length"],
             screen=inflow_screen(w, sh["gap"], self._native_velocity(D_guess)) if fluid else None,
         )  # fmt: skip
         inflow = self._pole_from_native(scene, inflow)
         log.info("inflow pole: %s", json.dumps(inflow))
         to_native = self._length(1.0)
-        win = MDWindow.from_piston(
+        win = ParticleWindow.from_piston(
             sim, res, front / to_native, self._native_velocity(u_p),
             self._native_velocity(D_guess), w["length"], w["front_fraction"], w["ghost_width"],
             w["cut_every"], w["sync_steps"], crystal=not fluid,

@@ -325,8 +325,8 @@ def _check_window(base: str, scene: dict) -> list[str]:
     """The window block of a scene that runs a window scheme: room for the slab ahead of the
     front (``keys.window_ahead_room``), a rigid outflow (the absorbing
     one reads the outflow wall's impulse, which this backend does not measure) and a frozen
-    layer at least the model's cutoff thick (``md.window.MDWindow.from_piston`` refuses a
-    thinner one)."""
+    layer at least the model's cutoff thick (``particles.window.ParticleWindow.from_piston``
+    refuses a thinner one)."""
     w, problems = scene["window"], []
     unit = "sigma" if scene["model"].get("units", "lj") == "lj" else "Angstrom"
     problems += window_ahead_room(base, w, scene["shock"], unit)

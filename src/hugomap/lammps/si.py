@@ -83,7 +83,7 @@ class SIGeometry:
 
 
 class WindowSIView(SIView):
-    """A units-metal window (``md.window.MDWindow`` over a ``LammpsSimulation``) as the
+    """A units-metal window (``particles.window.ParticleWindow`` over a ``LammpsSimulation``) as the
     window methods see it, in SI (module docstring); ``sim`` is the window itself. What a
     shock solver shows (clock, walls, shifts, profiles, save) is ``SIView``'s;
     this adds the window's own quantities."""

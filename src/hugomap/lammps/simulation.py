@@ -481,7 +481,7 @@ class LammpsSimulation(PerAtomAccess):
     @property
     def state(self) -> StateView:
         """The view of the state ``particles.sizing.size_bulk``, ``bulk_density`` and the moving
-        window (``md.window.MDWindow``) read."""
+        window (``particles.window.ParticleWindow``) read."""
         return StateView(self)
 
     # -- checkpoints -------------------------------------------------------------------------
@@ -557,7 +557,7 @@ class LammpsSimulation(PerAtomAccess):
 
 def native(solver) -> LammpsSimulation:
     """The ``LammpsSimulation`` of a solver the stages hold: itself, or the one inside an
-    ``SIView``, a window (``md.window.MDWindow``) or an SI view of a window."""
+    ``SIView``, a window (``particles.window.ParticleWindow``) or an SI view of a window."""
     while not isinstance(solver, LammpsSimulation) and hasattr(solver, "sim"):
         solver = solver.sim
     return solver

@@ -1,10 +1,11 @@
-"""The moving window on LAMMPS: the one particle window (``md.window.MDWindow``) over a
-``LammpsSimulation``, through ``LammpsKit``; in units metal seen in SI through
+"""The moving window on LAMMPS: the one particle window (``particles.window.ParticleWindow``)
+over a ``LammpsSimulation``, through ``LammpsKit``; in units metal seen in SI through
 ``si.WindowSIView``.
 
-``LammpsKit`` is what ``MDWindow`` and ``md.reservoir.make_reservoir`` need beyond the
-simulation's interface (``particles.kit.ParticleKit``): the domain and the reservoir are LAMMPS
-instances of the scene's own model (``model``), the reservoir a fully periodic box
+``LammpsKit`` is what ``ParticleWindow`` and ``particles.reservoir.make_reservoir`` need
+beyond the simulation's interface (``particles.kit.ParticleKit``): the domain and the
+reservoir are LAMMPS instances of the scene's own model (``model``), the reservoir a fully
+periodic box
 (``LammpsSimulation(periodic_x=True)``) of the scene's FCC lattice at (ρ0, T0) under
 LAMMPS's CSVR thermostat, so the inflow of an EAM copper scene is EAM copper. Its checkpoint
 kind is ``io.checkpoint.LAMMPS_WINDOW_CHECKPOINT``. Everything is in LAMMPS's native units
@@ -20,11 +21,12 @@ import os
 import numpy as np
 import xarray as xr
 
+from ..failures import WindowError
 from ..io.checkpoint import LAMMPS_WINDOW_CHECKPOINT, CheckpointKind
 from .simulation import NATIVE_NAMES, LammpsSimulation
 from .units import UNIT_SYSTEMS
 
-#: The length the window set-up's fixed lengths are counted in (``md.window``: MARGIN, the
+#: The length the window set-up's fixed lengths are counted in (``particles.window``: MARGIN, the
 #: seam's overlap distance, the walls' layer = 2, 0.8, 4 of these): lj 1 σ; metal 2 Å, so
 #: the walls' layer is the backend's 8 Å (``backend.WALL_LAYER``) and the seam overlap
 #: distance 1.6 Å (copper's nearest neighbours are 2.55 Å apart).
@@ -109,3 +111,14 @@ class LammpsKit:
     def skip_force_rows(self, sim: LammpsSimulation, n: int) -> None:
         """Nothing: LAMMPS computes the force on its frozen atoms (``fix nve/noforce`` ignores
         it); its neighbour lists are its own."""
+
+    def live_reservoir(
+        self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float, seam_work: str
+    ) -> None:
+        """None to give: the live inflow (``md.live_inflow``) is the numba MD's alone, refused
+        (``WindowError`` "bad_config")."""
+        raise WindowError("bad_config", "a live inflow reservoir runs on the numba MD backend only")
+
+    def load_live(self, ds: xr.Dataset, source: str | os.PathLike | None) -> None:
+        """None: a LAMMPS window has no live reservoir (``live_reservoir`` refuses one)."""
+        return None

@@ -3,9 +3,10 @@
 Reduced LJ units throughout (σ, ε, m = 1, τ = σ√(m/ε), k_B = 1). The sample is an FCC box
 closed by two static walls (``md.sample.fcc_state``); the piston runs in the piston's frame
 (the sample at −u_p, the piston wall at rest, the far wall moving with the upstream
-material); the window is ``md.window.MDWindow`` with an equilibrated periodic reservoir as its
-inflow; the reference Hugoniot is equilibrium NVT MD (``md.reference``), shared between scenes
-with the same inputs.
+material); the window is ``md.window.MDWindow`` (the particle window with ``md.kit.MDKit``)
+with an equilibrated periodic reservoir (``particles.reservoir``) as its inflow; the
+reference Hugoniot is equilibrium NVT MD (``md.reference``), shared between scenes with the
+same inputs.
 """
 
 from __future__ import annotations
@@ -269,25 +270,27 @@ class MDBackend:
         D_guess: float, pole: Pole, info: dict,
     ) -> WindowStart:  # fmt: skip
         """``MDWindow.from_piston`` with the front at ``window.front_fraction``, its inflow a
-        reservoir snapshot, run on beside the window (``window.inflow`` = "live",
-        ``md.live_inflow``) or carried frozen. A fluid's inflow is made at the piston
-        sample's measured (ρ0, E0), a frozen snapshot screened by the flow it feeds in at
-        D_guess (``window.reservoir_screen``, ``inflow_screen``), so both schemes share one pole
+        reservoir snapshot (``particles.reservoir.make_reservoir``), run on beside the window
+        (``window.inflow`` = "live", ``md.live_inflow``) or carried frozen. A fluid's inflow is
+        made at the piston sample's measured (ρ0, E0), a frozen snapshot screened by the flow
+        it feeds in at D_guess (``window.reservoir_screen``, ``inflow_screen``), so both
+        schemes share one pole
         (the sample's more precise P0, T0 are kept; the inflow's own measurement, a
         ~1000-atom box over 2 τ, is stored beside them as a check); a crystal's keeps the nominal lattice (the seam needs its registry) and T0,
         and its pole is the inflow's. The window runs ``settle_time`` at the guessed D (the
         set-up transient: new boundaries, the first seam), then ω is normalised by the pole
         (ρ0, P0) and the shocked slab between the outflow edge and the front (``shock.gap``
         clear of both)."""
+        from ..particles.reservoir import inflow_screen, make_reservoir
         from ..window.methods import OmegaSignal
-        from .reservoir import inflow_screen, make_reservoir
+        from .kit import MDKit
         from .window import MDWindow
 
         w, sh, s = scene["window"], scene["shock"], scene["sample"]
         fluid = scene["phase"] != "crystal"
         res, inflow = make_reservoir(
-            (s["cells"][1], s["cells"][2]), pole.rho0 if fluid else s["rho0"], s["T0"],
-            solver.lj, solver.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"],
+            MDKit(solver.lj), (s["cells"][1], s["cells"][2]), pole.rho0 if fluid else s["rho0"],
+            s["T0"], solver.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"],
             s["thermostat_tau"], E0_target=pole.E0 if fluid else None,
             min_length=w["reservoir_length"],
             screen=inflow_screen(w, sh["gap"], D_guess) if fluid and w["inflow"] == "frozen"

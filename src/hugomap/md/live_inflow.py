@@ -3,7 +3,7 @@
 A frozen inflow copy is one snapshot carried rigidly at u_in: every pass feeds the window
 the same instant of the snapshot's long acoustic modes, so each snapshot feeds a flow of its
 own (the default liquid's 40-σ snapshots −0.06 to +0.06 σ/τ at 10.76 σ/τ, sd 0.03,
-``md.reservoir``). The live reservoir runs the snapshot on, a fully periodic NVE box stepped
+``particles.reservoir``). The live reservoir runs the snapshot on, a fully periodic NVE box stepped
 with the window, and the copy behind ``x_hi`` follows it: the next image of reservoir atom
 i sits at ``unwrap_i(t) + (image_i L_r + offset(t)) e_x`` (``offset`` carried at u_in),
 on the reservoir's own trajectory, and is released, with the reservoir's position and
@@ -100,6 +100,11 @@ class LiveReservoir:
     @property
     def n(self) -> int:
         return self.sim.state.n
+
+    @property
+    def rlist(self) -> float:
+        """rc + skin [σ] of its potential (the window's): how far a copy atom reaches."""
+        return self.sim.lj.rlist
 
     def step(self, dt: float) -> None:
         """One velocity-Verlet step of ``dt`` [τ]; the unwrapped positions follow."""

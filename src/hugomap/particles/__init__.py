@@ -6,6 +6,8 @@
 - ``profiles``: the per-bin sums (``bin_sums``, the one binning kernel) and the fields
   made of them;
 - ``kit``: what the window and the reservoir need of a backend (``ParticleKit``);
+- ``window``: the moving window over any particle simulation (``ParticleWindow``);
+- ``reservoir``: the window's inflow snapshot and its screen (``make_reservoir``);
 - ``snapshot``: the frame of a snapshot's velocities (``velocity_frame``).
 
 Everything is in the simulation's own units (reduced LJ units, or LAMMPS's).

@@ -1,6 +1,7 @@
-"""What the moving window and its inflow reservoir need to know of a particle backend
-beyond the simulation's own interface (``ParticleKit``); ``md.kit.MDKit`` is the numba
-MD's, ``lammps.window.LammpsKit`` LAMMPS's.
+"""What the moving window (``particles.window.ParticleWindow``) and its inflow reservoir
+(``particles.reservoir.make_reservoir``) need to know of a particle backend beyond the
+simulation's own interface (``ParticleKit``); ``md.kit.MDKit`` is the numba MD's,
+``lammps.window.LammpsKit`` LAMMPS's.
 """
 
 from __future__ import annotations
@@ -16,13 +17,13 @@ from ..io.checkpoint import CheckpointKind
 __all__ = ["ParticleKit", "ParticleSim"]
 
 #: A particle simulation as this package drives it: an ``md.simulation.MDSimulation`` or a
-#: ``lammps.simulation.LammpsSimulation`` (what it must offer: the window's module
-#: docstring). Each backend's is its own class; nothing checks the type.
+#: ``lammps.simulation.LammpsSimulation`` (what it must offer: ``particles.window``'s
+#: module docstring). Each backend's is its own class; nothing checks the type.
 ParticleSim = Any
 
 
 class ParticleKit(Protocol):
-    """What the window and ``make_reservoir`` need to know of a particle backend
+    """What ``ParticleWindow`` and ``make_reservoir`` need to know of a particle backend
     beyond the simulation's own interface (module docstring), in the simulation's units:
     ``window_kind`` (its window checkpoint kind), ``units`` (the names of its length and
     velocity units), ``scale`` (the length the set-up's fixed lengths are counted in; σ),
@@ -62,3 +63,12 @@ class ParticleKit(Protocol):
     def skip_force_rows(self, sim, n: int) -> None:
         """Let ``sim`` skip the force on the frozen atoms with ids −1 … −n (the inflow copy),
         where it can without changing the mobile atoms' motion."""
+
+    def live_reservoir(self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float,
+                       seam_work: str):  # fmt: skip
+        """The live inflow reservoir (``inflow = "live"``) of these atoms, a periodic box of
+        side ``L`` run beside the window; ``WindowError`` ("bad_config") where the backend
+        has none."""
+
+    def load_live(self, ds: xr.Dataset, source: str | os.PathLike | None):
+        """The live inflow reservoir a window checkpoint holds, or None."""

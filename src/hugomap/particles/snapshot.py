@@ -9,7 +9,7 @@ LAMMPS units metal):
   piston's frame: the piston wall at rest, every upstream atom and the far wall moving at
   −u_p, so the velocity to the frame of the material at rest ahead of the front is
   −v_R = u_p, v_R the far wall's velocity (``walls0`` = [x_L0, v_L, x_R0, v_R]);
-- a window (``md.window.MDWindow``, over numba MD or LAMMPS) is in its own frame: the
+- a window (``particles.window.ParticleWindow``, over numba MD or LAMMPS) is in its own frame: the
   upstream material flows in at u_in < 0 across x_hi, the shocked material leaves across
   x_lo, so that velocity is −u_in, and the window's edges are ``geom.x_lo``, ``geom.x_hi``
   (the domain beyond them holds the frozen inflow copy and the outflow layer).

@@ -1,6 +1,6 @@
-"""The moving window's inflow reservoir: the snapshot whose copies ``md.window.MDWindow``
-feeds in (``make_reservoir``), chosen among candidates by its energy and, for a fluid, by the
-flow it leaves in the material it feeds (``InflowScreen``, ``inflow_drift``: the seam
+"""The moving window's inflow reservoir: the snapshot whose copies
+``particles.window.ParticleWindow`` feeds in (``make_reservoir``), chosen among candidates by
+its energy and, for a fluid, by the flow it leaves in the material it feeds (``InflowScreen``, ``inflow_drift``: the seam
 disturbance is each snapshot's own). Any particle backend, through its kit
 (``particles.kit.ParticleKit``), in the simulation's units.
 """
@@ -14,18 +14,16 @@ import numpy as np
 
 from ..analysis.stats import block_average
 from ..failures import WindowError
-from .kit import MDKit
-from .potential import LJParams
-from .simulation import MDSimulation
-from .window import MDWindow
+from .kit import ParticleKit, ParticleSim
+from .window import ParticleWindow
 
 
 def make_reservoir(
-    cells_yz: tuple[int, int], rho0: float, T0: float, lj: LJParams | None, dt: float,
+    kit: ParticleKit, cells_yz: tuple[int, int], rho0: float, T0: float, dt: float,
     seed: int, equilibrate_time: float, tau_bath: float = 0.5, n_candidates: int = 40,
-    every: int = 25, E0_target: float | None = None, pole_time: float = 2.0, kit=None,
+    every: int = 25, E0_target: float | None = None, pole_time: float = 2.0,
     min_length: float = 0.0, screen: InflowScreen | None = None,
-) -> tuple[MDSimulation, dict[str, float]]:  # fmt: skip
+) -> tuple[ParticleSim, dict[str, float]]:  # fmt: skip
     """The inflow's snapshot and the state of the material it feeds in.
 
     A fully periodic FCC box at (ρ0, T0), as many cells along x as make L_r ≥ 4 (rc + skin)
@@ -46,7 +44,7 @@ def make_reservoir(
     fed as a uniform flow at 10.76 σ/τ (``inflow_drift``, 20 τ averaged), the default
     liquid's snapshots flowed at −0.06 to +0.06 σ/τ (sd 0.030, 20 snapshots) with L_r =
     40 σ, sd 0.015 (8) with 120 σ and about 0.01 with 240 σ (−0.011 to +0.019, errors
-    0.01; laid in 40-σ segments, ``MDWindow.from_piston(segment=)``; but on a 240-σ
+    0.01; laid in 40-σ segments, ``ParticleWindow.from_piston(segment=)``; but on a 240-σ
     snapshot AMW oscillated), and AMW's P at u_p = 2 followed the flow fed in (about −1 %
     of P for +0.06 σ/τ). With ``screen`` (``InflowScreen``) the candidates closest to the target are
     tried in that order, each fed as a uniform flow through a window (``inflow_drift``),
@@ -59,10 +57,10 @@ def make_reservoir(
     measured on the released material itself, the snapshot run without thermostat for
     ``pole_time`` [τ] (block-average errors).
 
-    ``kit`` (``ParticleKit``; default ``MDKit(lj)``) builds the boxes, so the same choice
-    runs on any particle backend, in its own units: ρ0 [length⁻³], T0 its temperature
+    ``kit`` (``ParticleKit``: ``md.kit.MDKit`` of the potential, ``lammps.window.LammpsKit``
+    of the model) builds the boxes, so the same choice runs on any particle backend, in its
+    own units: ρ0 [length⁻³], T0 its temperature
     (k_B T0 = ``kit.kT(T0)`` [energy]), E0 [energy per atom], P [energy/length³]."""
-    kit = kit if kit is not None else MDKit(lj)
     a = (4.0 / rho0) ** (1.0 / 3.0)
     nx = max(2, math.ceil(max(4.0 * kit.rlist(), float(min_length)) / a))
     res = kit.reservoir((nx, *cells_yz), rho0, T0, dt, seed, tau_bath)
@@ -192,7 +190,7 @@ def inflow_drift(kit, snap, screen: InflowScreen) -> tuple[float, float]:
     """The mean x velocity δu [velocity], relative to the inflow's u_in, of the material a
     snapshot feeds into a window, and its block-average error.
 
-    The window (``MDWindow.from_piston`` with u_p = 0, D_guess = ``screen.speed``) is cut
+    The window (``ParticleWindow.from_piston`` with u_p = 0, D_guess = ``screen.speed``) is cut
     from copies of the snapshot itself laid end to end (periodic images: nothing to relax),
     so u_in = u_out = −V and only the inflow's seams act; after one transit it samples the
     mobile atoms from ``near`` to ``far`` upstream of the inflow seam every ``sync_steps``.
@@ -216,7 +214,7 @@ def inflow_drift(kit, snap, screen: InflowScreen) -> tuple[float, float]:
     ids = np.arange(x.shape[0], dtype=np.int64)
     flow = kit.domain(snap, x, v, ids, L, np.array([-sc, 0.0, L[0] + sc, 0.0]))
     front = wall + screen.ghost_width + sc + 0.5 * length
-    win = MDWindow.from_piston(
+    win = ParticleWindow.from_piston(
         flow, snap, front, 0.0, screen.speed, length, 0.5, screen.ghost_width,
         screen.cut_every, screen.sync_steps, kit=kit, segment=screen.segment,
         inflow=screen.inflow,
