@@ -25,12 +25,12 @@ import numpy as np
 import pytest
 
 from hugomap.analysis.shock import bin_edges, slab_state
-from hugomap.md.backend import MDProfile
 from hugomap.md.kit import MDKit
 from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation
 from hugomap.md.window import MDWindow
+from hugomap.particles.profiles import ParticleProfile
 from hugomap.particles.reservoir import make_reservoir
 
 RHO0, T0 = 0.8, 2.0
@@ -39,7 +39,7 @@ RHO0, T0 = 0.8, 2.0
 def region_state(sums, edges, lo, hi, area):
     """The MD slab state of the bins inside [lo, hi] (``analysis.shock.slab_state`` on the MD
     profile reader), under the MD field names n, T, ux, e."""
-    prof = MDProfile(area, float(edges[1] - edges[0]))
+    prof = ParticleProfile(area, float(edges[1] - edges[0]))
     st = slab_state(prof, sums, bin_edges(prof, sums.shape[0]), lo, hi)
     return {"n": st["rho"], "T": st["T"], "ux": st["u"], "e": st["E"]}
 

@@ -27,7 +27,8 @@ an NVE run measures the pole away from the walls (block averages, ``analysis.sta
 The piston runs in the MD backend's frame (drift removed, every atom at −u_p, the piston
 wall at rest, the far wall moving at −u_p with the upstream material), so u_p is exact and
 the shared analysis (``window.piston``, ``analysis.shock.measure_point``) measures the point
-from the profile sums (``particles.profiles.SUM_FIELDS``, read by the MD backend's ``MDProfile``).
+from the profile sums (``particles.profiles.SUM_FIELDS``, read by
+``particles.profiles.ParticleProfile``, the MD backend's reader too).
 
 The moving-window schemes (AMW, MW, the dichotomy) run the particle window the MD backend
 runs, ``particles.window.ParticleWindow``, over LAMMPS simulations
@@ -43,7 +44,8 @@ The shock-frame schemes msst and nphug (LAMMPS ``fix msst``, ``fix nphug`` on a 
 at the sample's pole, no loading, no window): ``shock_frame_point``, ``lammps.shockframe``.
 
 Not yet: trajectories (``extras`` writes the last frame only), a LAMMPS reference (an
-lj/cut scene's reference is the MD backend's equilibrium MD of the same potential).
+lj/cut scene's reference is the MD backend's equilibrium MD of the same potential, asked of
+the registry's ``solver: md`` backend: this package imports no ``hugomap.md``).
 """
 
 from __future__ import annotations
@@ -60,9 +62,10 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.linear_hugoniot import jump_state
-from ..analysis.shock import bin_edges, slab_state
-from ..analysis.stats import block_average
 from ..io.dataset import UnitTable, lj_units, si_units
+from ..particles.pole import measure_pole, reference_pole
+from ..particles.profiles import ParticleProfile
+from ..registry import backend as backend_of
 from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
 from .lattice import STATUS as POLE_OFF_PRESSURE
 from .lattice import bin_width, lattice_density
@@ -76,7 +79,6 @@ log = logging.getLogger("hugomap")
 #: Kept clear of a wall when measuring the pole [σ | Å]: lj the MD backend's 4 σ; metal
 #: 8 Å, beyond the walls' disturbed planes (an EAM cutoff, 5.5 Å for Cu_mishin1, and more).
 WALL_LAYER = {"lj": 4.0, "metal": 8.0}
-POLE_EVERY = 25  # steps between pole samples (the MD backend's)
 #: Longitudinal sound speed of a crystal [σ/τ | Å/ps] where the scene gives none (lj: an
 #: FCC LJ solid near its triple point; metal: copper [100]), for a crystal's Langevin phase.
 CRYSTAL_SOUND = {"lj": 8.0, "metal": 44.0}
@@ -220,9 +222,10 @@ class LammpsBackend:
         ``equilibrate_time`` under a Langevin thermostat, ``run_langevin``, then half
         as long under CSVR); then NVE for
         ``sample.pole_time`` while the pole is measured between ``WALL_LAYER`` and
-        L_x − ``WALL_LAYER``: ρ0 [σ⁻³], P0 = P_xx, Pyy0 [ε σ⁻³], E0 [ε per atom], T0
-        [ε/k_B], block averages (8 blocks) with standard errors. Info: what the sizing
-        measured (``sizing``; its energies in ε | eV per atom, ``T_nvt`` in ε/k_B | K).
+        L_x − ``WALL_LAYER`` (``particles.pole.measure_pole``): ρ0 [σ⁻³], P0 = P_xx, Pyy0
+        [ε σ⁻³], E0 [ε per atom], T0 [ε/k_B], block averages (8 blocks) with standard
+        errors. Info: what the sizing measured (``sizing``; its energies in ε | eV per atom,
+        ``T_nvt`` in ε/k_B | K).
         Units metal: T0 [K], Maxwell velocities of variance k_B T0/(m mvv2e) [Å²/ps²], the
         pole in SI through ``view`` and ``MetalProfile`` (ρ0 [kg/m³], P0, Pyy0 [Pa], E0
         [J/kg], T0 [K]), the layer 8 Å.
@@ -269,21 +272,9 @@ class LammpsBackend:
             log.info("sample sized: %s", json.dumps(info))
         sim.T_bath = None
         view = self.view(sim)
-        prof = self.profile(view, scene, info)
-        nsamples = max(int(round(s["pole_time"] / (s["dt"] * POLE_EVERY))), 16)
-        keys = {"rho": "rho0", "P": "P0", "E": "E0", "T": "T0", "Pyy": "Pyy0"}
-        series: dict[str, list[float]] = {k: [] for k in keys}
-        Lx, lay = self._length(float(sim.L[0])), self._length(layer)
-        nb = int(np.floor(Lx / prof.bin_width + 1e-9))
-        edges = bin_edges(prof, nb)
-        for _ in range(nsamples):
-            sim.advance(POLE_EVERY)
-            st = slab_state(prof, prof.sums(view)[:nb], edges, lay, Lx - lay)
-            for k in keys:
-                series[k].append(st[k])
-        pole = {}
-        for k, name in keys.items():
-            pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
+        pole = measure_pole(sim, view, self.profile(view, scene, info),
+                            self._length(float(sim.L[0])), self._length(layer), s["pole_time"],
+                            s["dt"])  # fmt: skip
         out = {"sizing": {k: v for k, v in info.items() if k != "lattice"}}
         if "lattice" in info:
             out["lattice"] = info["lattice"]
@@ -398,12 +389,11 @@ class LammpsBackend:
         return {}
 
     def profile(self, solver, scene: dict, info: dict | None = None):
-        """The MD backend's reader (``md.backend.MDProfile``): bins from x = 0 across
-        L_y L_z, fields by ``particles.profiles.fields_from_sums`` (units lj, m = 1); the bins'
-        width ``lattice.bin_width`` (``shock.bin_width``, scaled with a searched lattice)."""
-        from ..md.backend import MDProfile
-
-        return MDProfile(_area(solver), bin_width(scene, info))
+        """The particle backends' reader (``particles.profiles.ParticleProfile``): bins from
+        x = 0 across L_y L_z, fields by ``particles.profiles.fields_from_sums`` (units lj,
+        m = 1); the bins' width ``lattice.bin_width`` (``shock.bin_width``, scaled with a
+        searched lattice)."""
+        return ParticleProfile(_area(solver), bin_width(scene, info))
 
     # -- the window ------------------------------------------------------------------------
     def open_window(
@@ -497,12 +487,10 @@ class LammpsBackend:
         return inputs
 
     def reference_pole(self, scene: dict, pole: Pole) -> dict[str, float]:
-        """The MD backend's rule (``MDBackend.reference_pole``): the measured T0 and, for a
-        fluid, the measured ρ0 (a crystal: the lattice's; a searched one's from the pole,
-        ``_lattice_scene``)."""
-        from ..md.backend import MDBackend
-
-        return MDBackend().reference_pole(self._lattice_scene(scene, pole), pole)
+        """The MD backend's rule (``particles.pole.reference_pole``): the measured T0 and,
+        for a fluid, the measured ρ0 (a crystal: the lattice's; a searched one's from the
+        pole, ``_lattice_scene``)."""
+        return reference_pole(self._lattice_scene(scene, pole), pole)
 
     def _lattice_density(self, scene: dict, info: dict | None, pole: Pole | None) -> float:
         """The number density [σ⁻³ | Å⁻³] of the scene's crystal
@@ -522,14 +510,14 @@ class LammpsBackend:
         return {**scene, "sample": {**scene["sample"], "rho0": rho}}
 
     def reference(self, scene: dict, pole: Pole | None = None) -> xr.Dataset:
-        """The equilibrium-MD Hugoniot of the same potential (``MDBackend.reference`` on the
-        scene's lj/cut model: rc from ``pair_style``, shift from ``pair_modify shift yes``,
-        the skin); its ``reference_inputs`` attribute is this backend's. Other models:
+        """The equilibrium-MD Hugoniot of the same potential: the reference of the scene's
+        ``md_view`` (rc from ``pair_style``, shift from ``pair_modify shift yes``, the skin),
+        computed by that scene's backend, the registry's ``solver: md``; its
+        ``reference_inputs`` attribute is this backend's. Other models:
         ``NotImplementedError`` (a LAMMPS reference is a later slice). A searched crystal's
         reference is at its lattice (``_lattice_scene``)."""
-        from ..md.backend import MDBackend
-
-        ds = MDBackend().reference(md_view(self._lattice_scene(scene, pole)), pole)
+        twin = md_view(self._lattice_scene(scene, pole))
+        ds = backend_of(twin).reference(twin, pole)
         ds.attrs["reference_inputs"] = json.dumps(self.reference_inputs(scene, pole),
                                                   sort_keys=True)  # fmt: skip
         ds.attrs["reference_model"] = "equilibrium MD (hugomap.md.reference) of the lj/cut model"
@@ -599,13 +587,13 @@ class LammpsBackend:
         """Memory: LAMMPS's per-atom storage plus the profile history (samples x bins x 11
         float64, held and copied once); CPU: an upper bound of atom-steps at
         ``S_PER_ATOM_STEP`` (prepare: equilibration, pole and a lattice search; load/piston:
-        up to ``shock.max_time``; reference: as the MD backend's); ``ranks``: the scene's, the
-        memory that many times (every rank holds the gathered per-atom arrays)."""
+        up to ``shock.max_time``; reference: the cost the backend that computes it gives,
+        ``reference``'s); ``ranks``: the scene's, the memory that many times (every rank
+        holds the gathered per-atom arrays)."""
         s, sh = scene["sample"], scene["shock"]
         if stage == "reference":
-            from ..md.backend import MDBackend
-
-            return MDBackend().cost(md_view(scene), stage)
+            twin = md_view(scene)
+            return backend_of(twin).cost(twin, stage)
         n = 4 * s["cells"][0] * s["cells"][1] * s["cells"][2]
         ranks = int(scene["ranks"])
         if stage == "prepare":

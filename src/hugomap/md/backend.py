@@ -21,10 +21,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..analysis.shock import bin_edges, slab_state
-from ..analysis.stats import block_average
 from ..io.dataset import lj_units
-from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
+from ..particles.pole import measure_pole, reference_pole
+from ..particles.profiles import ParticleProfile
+from ..states import ControlParams, PistonFrame, Pole, Resources, WindowStart
 
 log = logging.getLogger("hugomap")
 WALL_LAYER = 4.0  # sigma kept clear of a wall when measuring the pole (wall layering)
@@ -44,34 +44,6 @@ def lj(scene: dict):
 
     p = scene["potential"]
     return LJParams(rc=p["rc"], shift=p["shift"], skin=p["skin"])
-
-
-class MDProfile:
-    """Profile reader of an MD run: bins of ``bin_width`` [σ] from x = 0 across the transverse
-    ``area`` [σ²]; fields by ``particles.profiles.fields_from_sums`` (n is also the mass density,
-    m = 1)."""
-
-    x0 = 0.0
-
-    def __init__(self, area: float, bin_width: float):
-        self.area = float(area)
-        self.bin_width = float(bin_width)
-
-    def sums(self, solver) -> np.ndarray:
-        return solver.profile_sums(self.bin_width)
-
-    def velocity(self, sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        c = sums[:, 0]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return sums[:, 1] / c, c
-
-    def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
-        from ..particles.profiles import fields_from_sums
-
-        f = fields_from_sums(summed[None, :], self.area * self.bin_width * n_bins)
-        return SlabState(rho=float(f["n"][0]), u=float(f["ux"][0]), P=float(f["Pxx"][0]),
-                         Pyy=float(f["Pyy"][0]), Pzz=float(f["Pzz"][0]), E=float(f["e"][0]),
-                         T=float(f["T"][0]))  # fmt: skip
 
 
 def _area(solver) -> float:
@@ -170,7 +142,8 @@ class MDBackend:
         walls, is at ρ0 (a fluid: L_x = cells·a less the walls' excess layer, about 0.2 % for the
         default liquid; a crystal keeps its lattice) and ends at the canonical mean energy of
         T0; then run without thermostat for ``pole_time`` while the pole is measured away
-        from the walls: ρ0, P0 = P_xx, E0, T0, P_yy0 (block averages with standard errors).
+        from the walls (``particles.pole.measure_pole``): ρ0, P0 = P_xx, E0, T0, P_yy0 (block
+        averages with standard errors).
         The sample info is what ``size_bulk`` did (``length_x`` [σ], ``x_scale``, the bulk
         density and energies it measured), for the record."""
         from ..particles.sizing import size_bulk
@@ -190,23 +163,9 @@ class MDBackend:
                              resize=scene["phase"] != "crystal")  # fmt: skip
             log.info("sample sized: %s", json.dumps(info))
         sim.T_bath = None
-        state = sim.state
-        prof = MDProfile(_area(sim), scene["shock"]["bin_width"])
-        every = 25
-        nsamples = max(int(round(s["pole_time"] / (s["dt"] * every))), 16)
-        keys = {"rho": "rho0", "P": "P0", "E": "E0", "T": "T0", "Pyy": "Pyy0"}
-        series: dict[str, list[float]] = {k: [] for k in keys}
-        nb = int(np.floor(state.L[0] / prof.bin_width + 1e-9))
-        edges = bin_edges(prof, nb)
-        for _ in range(nsamples):
-            sim.advance(every)
-            sums = prof.sums(sim)[:nb]
-            st = slab_state(prof, sums, edges, WALL_LAYER, state.L[0] - WALL_LAYER)
-            for k in keys:
-                series[k].append(st[k])
-        pole = {}
-        for k, name in keys.items():
-            pole[name], pole[name + "_err"] = block_average(np.asarray(series[k]))
+        prof = ParticleProfile(_area(sim), scene["shock"]["bin_width"])
+        pole = measure_pole(sim, sim, prof, float(sim.state.L[0]), WALL_LAYER, s["pole_time"],
+                            s["dt"])  # fmt: skip
         return sim, Pole.from_dict(pole), {"sizing": info}
 
     def save(self, solver, out: str | os.PathLike, extra: xr.Dataset, attrs: dict) -> Path:
@@ -249,12 +208,12 @@ class MDBackend:
             ahead_gap=sh.get("ahead_gap"),
         )  # fmt: skip
 
-    def profile(self, solver, scene: dict, info: dict | None = None) -> MDProfile:
+    def profile(self, solver, scene: dict, info: dict | None = None) -> ParticleProfile:
         """The profile reader; with ``shock.snapshot_every`` = N it also takes a trajectory
         frame (``md_frame``) every N samples (``io.extxyz.RecordingProfile``; not while
         loading: ``start_piston`` marks the solver), which ``extras`` and ``window_extras``
         write."""
-        prof = MDProfile(_area(solver), scene["shock"]["bin_width"])
+        prof = ParticleProfile(_area(solver), scene["shock"]["bin_width"])
         every = scene["shock"].get("snapshot_every", 0)
         if not every or getattr(solver, "loading", False):
             return prof
@@ -350,18 +309,9 @@ class MDBackend:
 
     def reference_pole(self, scene: dict, pole: Pole) -> dict[str, float]:
         """The (ρ0 [σ⁻³], T0 [ε/k_B]) the reference is computed at, with their standard
-        errors: the sample's measured T0 and, for a fluid, its measured bulk ρ0. A crystal
-        keeps the lattice's ρ0 (``sample.rho0``; ``size_bulk`` does not resize it): its
-        atoms stay on their sites, so the bulk density is the lattice's exactly, while the
-        slab measurement counts whole bins against planes a/2 apart and is off by up to one
-        plane in the slab (+0.34 % on the default crystal)."""
-        fluid = scene["phase"] != "crystal"
-        return {
-            "rho0": float(pole.rho0) if fluid else float(scene["sample"]["rho0"]),
-            "rho0_err": float(pole.rho0_err) if fluid else 0.0,
-            "T0": float(pole.T0),
-            "T0_err": float(pole.T0_err),
-        }
+        errors (``particles.pole.reference_pole``: the measured T0 and, for a fluid, the
+        measured bulk ρ0; a crystal keeps the lattice's)."""
+        return reference_pole(scene, pole)
 
     def reference(self, scene: dict, pole: Pole | None = None) -> xr.Dataset:
         """The equilibrium-MD Hugoniot (``md.reference``) of ``reference_inputs(scene,

@@ -1,4 +1,7 @@
-"""Profiles along x: number density, velocity, pressure tensor, temperature, energy per atom.
+"""Profiles along x: number density, velocity, pressure tensor, temperature, energy per atom,
+for both particle backends: the one binning kernel (``bin_sums``, which the numba MD and
+LAMMPS's per-atom arrays both go through), the fields made of its sums
+(``fields_from_sums``) and the profile reader the shock methods use (``ParticleProfile``).
 
 Atoms are binned by x into slabs of width w [σ] across the full transverse area A = L_y L_z.
 For a slab with c atoms, volume V_b = A w (m = 1, k_B = 1):
@@ -15,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..numba_conf import njit
+from ..states import SlabState
 
 # Columns of the raw per-bin sums.
 SUM_FIELDS = ("count", "vx", "vy", "vz", "vxx", "vyy", "vzz", "pe", "wxx", "wyy", "wzz")
@@ -72,3 +76,30 @@ PROFILE_UNITS = {
     "T": ("epsilon k_B^-1", "temperature from velocities relative to the bin mean"),
     "e": ("epsilon", "specific internal energy per atom (thermal kinetic + potential)"),
 }
+
+
+class ParticleProfile:
+    """Profile reader of a particle run in reduced LJ units (the numba MD's, LAMMPS units
+    lj's; units metal: ``lammps.backend.MetalProfile``): bins of ``bin_width`` [σ] from
+    x = 0 across the transverse ``area`` [σ²]; fields by ``fields_from_sums`` (n is also the
+    mass density, m = 1)."""
+
+    x0 = 0.0
+
+    def __init__(self, area: float, bin_width: float):
+        self.area = float(area)
+        self.bin_width = float(bin_width)
+
+    def sums(self, solver) -> np.ndarray:
+        return solver.profile_sums(self.bin_width)
+
+    def velocity(self, sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        c = sums[:, 0]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return sums[:, 1] / c, c
+
+    def state(self, summed: np.ndarray, n_bins: int) -> SlabState:
+        f = fields_from_sums(summed[None, :], self.area * self.bin_width * n_bins)
+        return SlabState(rho=float(f["n"][0]), u=float(f["ux"][0]), P=float(f["Pxx"][0]),
+                         Pyy=float(f["Pyy"][0]), Pzz=float(f["Pzz"][0]), E=float(f["e"][0]),
+                         T=float(f["T"][0]))  # fmt: skip
