@@ -130,6 +130,31 @@ def test_config_imports_nothing_above_it() -> None:
     assert reach == {"hugomap", "hugomap.campaign_expand", "hugomap.keys", "hugomap.registry"}
 
 
+def test_particle_backends_stand_side_by_side() -> None:
+    """The two particle backends share ``hugomap.particles`` and do not import each other:
+    no module of ``lammps`` imports ``md`` (its lj/cut reference is asked of the registry's
+    ``solver: md`` backend, by name), none of ``md`` imports ``lammps``, and ``particles``
+    imports neither."""
+
+    def under(module: str, package: str) -> bool:
+        return module == package or module.startswith(package + ".")
+
+    graph = import_graph()
+    for src, banned in [("hugomap.lammps", ("hugomap.md",)),
+                        ("hugomap.md", ("hugomap.lammps",)),
+                        ("hugomap.particles", ("hugomap.md", "hugomap.lammps"))]:  # fmt: skip
+        found = sorted(
+            f"{m} -> {w}"
+            for m, edges in graph.items()
+            if under(m, src)
+            for w in edges
+            if any(under(w, b) for b in banned)
+        )
+        assert not found, f"{src} imports {banned}: " + "; ".join(found)
+    assert any(under(w, "hugomap.particles") for w in graph["hugomap.lammps.backend"])
+    assert any(under(w, "hugomap.particles") for w in graph["hugomap.md.backend"])
+
+
 if __name__ == "__main__":
     found = cycles(import_graph())
     for c in found:
