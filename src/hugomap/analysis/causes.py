@@ -22,10 +22,6 @@ RESIDUAL_FLOOR = 1e-4
 
 
 CLOSURES = ("mass", "momentum", "energy", "flow")  # the residuals an ok point closes
-# A porous slab whose distention exceeds 1 by more than this (and 3 of its errors) is named
-# partially compacted: 0.5 % of volume is 1.5 % of the porous copper energy jump's V00 − V
-# at 100 m/s (sph/backend.py), so below it compaction cannot explain an energy residual.
-COMPACTION_TOL = 0.005
 
 
 def residual_text(values: dict, closures: tuple[str, ...] = CLOSURES) -> str:
@@ -88,7 +84,10 @@ def named_causes(
     flow_closes: bool = True,
 ) -> list[str]:
     """Physical causes, measured on the point, that keep its slab from being the steady
-    shocked state the jump conditions describe:
+    shocked state the jump conditions describe. (A porous slab whose pores stay partly
+    open is not one: a steady, uniform slab at distention α > 1 is a Hugoniot state of the
+    porous body, compared with the Hugoniot at its own α, ``analysis.porous``; pores still
+    closing show as a slab not uniform or not steady.)
     - where the flow is only a diagnostic (a window: not ``flow_closes``), the slab moving
       relative to the boundary behind it by more than ``residual_tol`` of u_p and
       ``CLOSE_SIGMAS`` errors: the shocked region between them is not uniform (porous
@@ -100,9 +99,6 @@ def named_causes(
       = 1: the material 12-20 σ behind the front moves at 0.96-0.98 u_p, the whole shocked
       column at −0.02 to −0.035 σ/τ in the piston frame for 10 τ, and the wall's pressure
       is 1.4 % below the Rayleigh line);
-    - a porous slab not fully compacted: its distention ``alpha`` above 1 by more than
-      ``COMPACTION_TOL`` and 3 of its errors (a full-compaction Hugoniot does not apply, and
-      its V, so the energy jump, carries the pores' unevenness);
     - a slab that is not uniform or not steady: ``spread[k]`` = (near half − far half, late
       half of the samples − early half) of field k beyond their noise (``measure_point``)
       larger than ``residual_tol`` of the jump k − k0 in ρ, P or E (a relaxation zone, the
@@ -147,13 +143,6 @@ def named_causes(
             "the boundary behind it, beyond the tolerance and 3 errors, so the material between "
             "them is in another state (a relaxation zone longer than shock.gap, pores still "
             "closing, or the boundary's control ringing): the slab is not yet the end state"
-        )
-    a, ae = values.get("alpha", np.nan), values.get("alpha_err", np.nan)
-    if np.isfinite(a) and a - 1.0 > max(COMPACTION_TOL, CLOSE_SIGMAS * (ae if ae > 0 else 0.0)):
-        out.append(
-            f"partial compaction: the slab's distention alpha = {a:.4g} ± {ae:.2g} (1: fully "
-            "compacted), so a full-compaction Hugoniot does not describe it and its volume, "
-            "hence the energy jump, carries the pores' unevenness"
         )
     if not ahead_seen(values):
         out.append(
