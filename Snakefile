@@ -120,6 +120,7 @@ include: "workflow/rules/window.smk"
 include: "workflow/rules/shockframe.smk"
 include: "workflow/rules/hugoniot.smk"
 include: "workflow/rules/campaign.smk"
+include: "workflow/rules/validation_report.smk"
 
 
 rule all:
