@@ -357,6 +357,69 @@ class CSPHBackend:
         )  # fmt: skip
         return ds
 
+    def point_references(self, ds: xr.Dataset, scene: dict) -> xr.Dataset:
+        """A porous scene's points beside the Hugoniot at each slab's own distention
+        (``analysis.porous.partial_compaction_from_up``, Herrmann's P–α form on the solid's
+        Mie–Grüneisen surface) at the slab's u_p (``u_p_jump``, else ``u_p_measured``) from
+        the sample's measured distention ρ_solid/ρ0: ``D_compaction_ref``,
+        ``P_compaction_ref`` [m s⁻¹, Pa] with standard errors from the slab's α and u_p errors
+        and the deviator's range (0 to (2/3) Y/α, half of it taken as one error). Other scenes:
+        ``ds`` unchanged. Points without a finite α or u_p, or too weak for the compaction
+        (the matrix would stay uncompressed), get NaN."""
+        por = scene["sample"].get("porous") if scene.get("dim") == 2 else None
+        if por is None or "alpha" not in ds:
+            return ds
+        from ..analysis.porous import MGSolid, partial_compaction_from_up
+
+        e, st = scene["material"]["eos"], scene["material"].get("strength", {})
+        solid = MGSolid(e["rho0"], e["c0"], e["s"], e["gamma0"])
+        Y = float(st.get("yield_stress", 0.0)) if st.get("model") == "von_mises" else 0.0
+        alpha0 = e["rho0"] / float(ds["rho0"]) if "rho0" in ds else float(por["distention"])
+
+        def col(k: str) -> np.ndarray:
+            return ds[k].values.astype(float) if k in ds else np.full(ds["alpha"].shape, np.nan)
+
+        u = np.where(np.isfinite(col("u_p_jump")), col("u_p_jump"), col("u_p_measured"))
+        ue = np.where(np.isfinite(col("u_p_jump")), col("u_p_jump_err"), col("u_p_measured_err"))
+        a, ae = col("alpha"), np.nan_to_num(col("alpha_err"))
+        out = {k: np.full(a.shape, np.nan) for k in ("D", "D_err", "P", "P_err")}
+
+        def state(uu: float, aa: float, tau: float) -> tuple[float, float]:
+            h = partial_compaction_from_up(uu, alpha0, min(max(aa, 1.0), alpha0 - 1e-9), solid,
+                                           deviator=tau)  # fmt: skip
+            return float(h.D), float(h.P)
+
+        for i in np.ndindex(a.shape):
+            if not (np.isfinite(u[i]) and u[i] > 0 and np.isfinite(a[i])):
+                continue
+            try:
+                half = 0.5 * (2.0 / 3.0) * Y / max(a[i], 1.0)
+                D, P = state(u[i], a[i], half)
+                dev = [state(u[i], a[i], t) for t in (0.0, 2.0 * half)]
+                da = [state(u[i], a[i] + s * ae[i], half) for s in (-1.0, 1.0)]
+                du = (
+                    [state(u[i] + s * ue[i], a[i], half) for s in (-1.0, 1.0)]
+                    if np.isfinite(ue[i]) and ue[i] > 0
+                    else [(D, P), (D, P)]
+                )
+            except ValueError:
+                continue
+            for j, k in enumerate(("D", "P")):
+                parts = [0.5 * abs(x[1][j] - x[0][j]) for x in (dev, da, du)]
+                out[k][i], out[k + "_err"][i] = (D, P)[j], float(np.sqrt(np.sum(np.square(parts))))
+        what = ("at the slab's own distention alpha (Herrmann P-alpha on the solid's "
+                f"Mie-Grueneisen EOS, initial distention {alpha0:.5g})")  # fmt: skip
+        attrs = {"D": ("m s-1", "shock velocity of the porous Hugoniot " + what),
+                 "P": ("Pa", "P_xx of the porous Hugoniot " + what)}  # fmt: skip
+        ds = ds.copy()
+        for k, (unit, name) in attrs.items():
+            ds[f"{k}_compaction_ref"] = (ds["alpha"].dims, out[k],
+                                         {"units": unit, "long_name": name})  # fmt: skip
+            ds[f"{k}_compaction_ref_err"] = (ds["alpha"].dims, out[k + "_err"],
+                                             {"units": unit, "long_name": "standard error of "
+                                              f"{k}_compaction_ref"})  # fmt: skip
+        return ds
+
     def extras(self, solver, out: Path, scene: dict, u_p: float, info: dict) -> None:
         """A piston run's snapshots beside its point file: ``<stem>_snapshot.extxyz`` (the
         last state; ``sph.snapshot.sph_frame``) and, in 2D, ``<stem>_snapshot.png``

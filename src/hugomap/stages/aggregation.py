@@ -41,11 +41,14 @@ def aggregate(
                 sc = json.loads(getattr(nc, "scene_config", "{}"))
         groups.setdefault(str(name), []).append(p)
     scene_config = config.get("scenes", {}).get(scene, sc)
-    units = backend_of(scene_config).units
-    parts = [
-        aggregate_points(ps, name, ref, config, scene, units).sortby("u_p")
-        for name, ps in groups.items()
-    ]
+    be = backend_of(scene_config)
+    # a backend may set each point beside a reference of its own state (porous copper: the
+    # Hugoniot at the slab's own distention)
+    own_ref = getattr(be, "point_references", lambda ds, sc: ds)
+    parts = []
+    for name, ps in groups.items():
+        part = aggregate_points(ps, name, ref, config, scene, be.units)
+        parts.append(own_ref(part, scene_config).sortby("u_p"))
     names = {k for part in parts for k, v in part.data_vars.items() if "scheme" in v.dims}
     for i, part in enumerate(parts):
         for k in names - set(part.data_vars):
