@@ -3,16 +3,19 @@
 A piston's sample must hold the whole distance its front travels, so a point that needs the
 front's structure to settle for a time T_s and then an average over T_a costs
 
-    cpu_piston = c_p · n_x · L_p · (T_s + T_a)/Δt,   L_p = D (T_s + T_a) + l_far,
+    cpu_piston = k · L_p · (T_s + T_a),   L_p = D (T_s + T_a) + l_far,
 
-with c_p the piston's CPU per atom-step, n_x = ρ0 A the atoms per unit length of sample, D the
-shock speed (the sample's far end closes on the front at D in the piston frame, so the
-length the front and the far end use up together is D (T_s + T_a)) and l_far what stays
-ahead at the end (``shock.rear_margin`` and the slab ahead): it grows as T², where a window
-of fixed length grows as T (SEED-en.md; ``benchmarks/window_cost.py`` measures both laws on
-the LJ liquid). T_s is measured on the window itself: the simulated time from the start of the
-piston drive (the window keeps the piston run's clock) to the start of its steady average,
-i.e. loading, the window's settling and the control windows until ω was calm.
+with k the piston's CPU per unit length of sample per unit simulated time (c_p n_x/Δt: its
+CPU per particle-step c_p, particles per unit length n_x, time step Δt), measured on the
+sweep's own piston runs as cpu_s/(L_sample T_run); D the shock speed (the sample's far end
+closes on the front at D in the piston frame, so the length the front and the far end use
+up together is D (T_s + T_a)) and l_far what stays ahead at the end (MD: ``shock.
+rear_margin``, CSPH: the (1 − ``shock.end_fraction``) of the sample a run leaves, and the
+slab ahead): it grows as T², where a window of fixed length grows as T (SEED-en.md;
+``benchmarks/window_cost.py`` measures both laws on the LJ liquid). T_s is measured on the
+window itself: the simulated time from the start of the piston drive (the window keeps the
+piston run's clock) to the start of its steady average, i.e. loading, the window's settling
+and the control windows until ω was calm.
 
 Input: the point files of a finished sweep, e.g. of ``config/lj_fcc.yaml``
 (``results/<scene>/up<u>/{amw,mw,dichotomy,piston}.nc`` with the ``loaded.nc`` beside them);
@@ -24,14 +27,14 @@ optionally those of a piston run on a sample long enough to reach the same state
 
 and for every window point that is ``ok`` an extrapolated piston row at the same T_s and T_a,
 on the assumption that a piston's slab of the same length averaged over the same T_a states
-the same error (a run of ``--piston-root`` checks it: its row stands beside). c_p comes from
-the piston points of the same sweep (their cpu_s over atom_steps), as does n_x (the sample's
-atoms over its length). Then one ``ratio`` row per window point: the piston's CPU over the
-window's.
+the same error (a run of ``--piston-root`` checks it: its row stands beside). k comes from
+the piston points of the same sweep (the median of their cpu_s over their sample's length
+and their run's simulated time; c_p, their cpu_s over atom_steps, is reported beside it).
+Then one ``ratio`` row per window point: the piston's CPU over the window's.
 
     python benchmarks/relaxing_cost.py results_lj_fcc --case lj_fcc_strong
     python benchmarks/relaxing_cost.py results_a results_b --piston-root results_long \
-        --case lj_fcc --out docs/figures
+        --case lj_fcc --scenes lj_fcc_strong lj_fcc_weak --out docs/figures
 
 Output: JSON lines on stdout (the machine named in each), the same lines in
 ``<out>/relaxing_cost_<case>.jsonl`` and a figure ``<out>/relaxing_cost_<case>.png``: CPU
@@ -104,64 +107,82 @@ def point_row(path: Path, case: str) -> dict | None:
     return row
 
 
-def _sample_line_density(scene: dict) -> float:
-    """Atoms per unit length of an MD sample: 4 per FCC cell of volume 4/ρ0, times the
-    cells across (ρ0 · A) [σ⁻¹]."""
+def sample_length(scene: dict) -> float:
+    """The length of a scene's sample along x [σ | m]: MD, cells along x times the FCC cell
+    a = (4/ρ0)^(1/3); CSPH, ``sample.length``."""
     s = scene["sample"]
-    a = (4.0 / s["rho0"]) ** (1.0 / 3.0)
-    return 4.0 * s["cells"][1] * s["cells"][2] / a
+    if scene.get("solver") == "csph":
+        return float(s["length"])
+    return s["cells"][0] * (4.0 / s["rho0"]) ** (1.0 / 3.0)
 
 
-def _room_ahead(sh: dict) -> float:
-    """What a piston run leaves ahead of its front at the end: ``shock.rear_margin`` and the
-    slab ahead, 2 ``shock.ahead_gap`` (default ``shock.gap``) + ``MIN_SLAB_BINS`` bins."""
+def _room_ahead(scene: dict, front_travel: float) -> float:
+    """What a piston run leaves ahead of its front at the end: the slab ahead, 2
+    ``shock.ahead_gap`` (default ``shock.gap``) and its length (MD: ``MIN_SLAB_BINS``
+    bins, CSPH: ``shock.avg_length``), and MD's ``shock.rear_margin``; CSPH's run ends when
+    its front has crossed ``shock.end_fraction`` of the sample, so at least the rest of it."""
+    sh = scene["shock"]
     gap = sh.get("ahead_gap") or sh["gap"]
+    if scene.get("solver") == "csph":
+        slab = 2.0 * gap + sh["avg_length"]
+        return max(slab, front_travel * (1.0 / sh["end_fraction"] - 1.0))
     return sh["rear_margin"] + 2.0 * gap + MIN_SLAB_BINS * sh["bin_width"]
 
 
-def piston_extrapolated(win: dict, c_p: float, case: str) -> dict:
+def piston_rate(row: dict) -> float:
+    """A piston run's CPU per unit length of sample per unit simulated time, k [s/(σ τ) |
+    s/(m s)]: its cpu_s over its sample's length and its run's simulated time."""
+    return row["cpu_s"] / (sample_length(row["_scene"]) * row.get("sim_time", np.nan))
+
+
+def piston_extrapolated(win: dict, k: float, case: str) -> dict:
     """The piston's CPU for the window point ``win``'s T_s and T_a (module docstring)."""
-    scene = win["_scene"]
-    sh = scene["shock"]
     T = win["T_s"] + win["T_a"]
-    far = _room_ahead(sh)
-    L_p = win["D"] * T + far
-    n_x = _sample_line_density(scene)
-    steps = T / sh["dt"]
+    L_p = win["D"] * T + _room_ahead(win["_scene"], win["D"] * T)
     return {
         "case": case, "scheme": "piston", "u_p": win["u_p"], "kind": "extrapolated",
-        "status": "extrapolated", "cpu_s": c_p * n_x * L_p * steps,
-        "atom_steps": n_x * L_p * steps, "sample_length": L_p, "sim_time": T,
+        "status": "extrapolated", "cpu_s": k * L_p * T, "sample_length": L_p, "sim_time": T,
         "T_s": win["T_s"], "T_a": win["T_a"], "D_rel_err": win["D_rel_err"],
-        "P_rel_err": win["P_rel_err"], "c_p": c_p, "from_scheme": win["scheme"],
+        "P_rel_err": win["P_rel_err"], "k": k, "from_scheme": win["scheme"],
     }  # fmt: skip
 
 
-def crossover_time(win: dict, c_p: float) -> float:
+def crossover_time(win: dict, k: float) -> float:
     """The simulated time T* [τ or s] below which a piston is cheaper than the window point
-    ``win``'s own cost law, cpu_w = (cpu/sim_time) T: c_p n_x (D T* + l_far)/Δt equal to
-    the window's rate per unit simulated time (module docstring's piston law per unit T)."""
-    scene = win["_scene"]
-    sh = scene["shock"]
-    far = _room_ahead(sh)
+    ``win``'s own cost law, cpu_w = (cpu/sim_time) T: where the piston's cost per unit T,
+    k L_p(T*), equals the window's rate (bisection: L_p grows with T)."""
     rate = win["cpu_s"] / win["sim_time"]
-    per_length = c_p * _sample_line_density(scene) / sh["dt"]  # CPU per σ of sample per τ
-    return float((rate / per_length - far) / win["D"])
+
+    def gap(T: float) -> float:
+        return k * (win["D"] * T + _room_ahead(win["_scene"], win["D"] * T)) - rate
+
+    lo, hi = 0.0, win["sim_time"]
+    if gap(lo) >= 0:
+        return 0.0
+    while gap(hi) < 0:
+        hi *= 2.0
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if gap(mid) >= 0 else (mid, hi)
+    return 0.5 * (lo + hi)
 
 
-def collect(roots: list[Path], case: str) -> list[dict]:
+def collect(roots: list[Path], case: str, scenes: list[str]) -> list[dict]:
+    """The point rows of ``scenes`` (results/<scene>/up*/<scheme>.nc) under each root,
+    labelled ``case``, each with its root and scene."""
     rows = []
     for root in roots:
-        for path in sorted(root.glob(f"{case}/up*/*.nc")):
-            if path.stem in ("piston", *WINDOW_SCHEMES):
-                r = point_row(path, case)
-                if r is not None:
-                    r["root"] = str(root)
-                    rows.append(r)
+        for scene in scenes:
+            for path in sorted(root.glob(f"{scene}/up*/*.nc")):
+                if path.stem in ("piston", *WINDOW_SCHEMES):
+                    r = point_row(path, case)
+                    if r is not None:
+                        r.update(root=str(root), scene=scene)
+                        rows.append(r)
     return rows
 
 
-def _curves(ax, win: dict, c_p: float) -> None:
+def _curves(ax, win: dict, k: float) -> None:
     """The window's cost line and the piston's T² curve against T_a, both in terms of the
     stated relative P error ∝ T_a^(-1/2) from the window point's own."""
     T_a0, e0 = win["T_a"], win["P_rel_err"]
@@ -169,12 +190,12 @@ def _curves(ax, win: dict, c_p: float) -> None:
     e = e0 * np.sqrt(T_a0 / T_a)
     rate = win["cpu_s"] / win["sim_time"]  # the window: linear in the simulated time
     cpu_w = rate * (win["T_s"] + T_a)
-    cpu_p = [piston_extrapolated({**win, "T_a": t}, c_p, "")["cpu_s"] for t in T_a]
+    cpu_p = [piston_extrapolated({**win, "T_a": t}, k, "")["cpu_s"] for t in T_a]
     ax.plot(e, cpu_w, "-", color="C1", lw=1, alpha=0.6)
     ax.plot(e, cpu_p, "--", color="C0", lw=1, alpha=0.6)
 
 
-def figure(rows: list[dict], case: str, c_p: float, out: Path) -> Path:
+def figure(rows: list[dict], case: str, k: float, out: Path) -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -196,7 +217,7 @@ def figure(rows: list[dict], case: str, c_p: float, out: Path) -> Path:
                     xytext=(3, 3), textcoords="offset points")  # fmt: skip
     for r in rows:
         if r.get("kind") == "run" and r["scheme"] in WINDOW_SCHEMES and r["status"] == "ok":
-            _curves(ax, {**r, "P_rel_err": 100 * r["P_rel_err"]}, c_p)
+            _curves(ax, {**r, "P_rel_err": 100 * r["P_rel_err"]}, k)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("stated relative error of P − P0 [%]")
@@ -221,26 +242,30 @@ def figure(rows: list[dict], case: str, c_p: float, out: Path) -> Path:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("root", type=Path, nargs="+", help="results folders of the sweep(s)")
-    ap.add_argument("--case", required=True, help="scene name")
+    ap.add_argument("--case", required=True, help="the case's label (and its scene's name)")
+    ap.add_argument("--scenes", nargs="+", help="the case's scenes (default: --case)")
     ap.add_argument("--piston-root", type=Path, help="results folder of a long piston run")
     ap.add_argument("--out", type=Path, default=Path("results/benchmarks"))
     args = ap.parse_args()
     roots = list(args.root) + ([args.piston_root] if args.piston_root else [])
-    rows = collect(roots, args.case)
-    pistons = [r for r in rows if r["scheme"] == "piston" and r["atom_steps"] > 0]
+    rows = collect(roots, args.case, args.scenes or [args.case])
+    pistons = [r for r in rows if r["scheme"] == "piston" and r["atom_steps"] > 0
+               and np.isfinite(r.get("sim_time", np.nan))]  # fmt: skip
+    k = float(np.median([piston_rate(r) for r in pistons])) if pistons else float("nan")
     c_p = (float(np.median([r["cpu_s"] / r["atom_steps"] for r in pistons]))
            if pistons else float("nan"))  # fmt: skip
     machine = _machine()
     out_rows = []
     for r in rows:
         out_rows.append(r)
-        if r["scheme"] in WINDOW_SCHEMES and r["status"] == "ok" and np.isfinite(c_p):
-            p = piston_extrapolated(r, c_p, args.case)
+        if r["scheme"] in WINDOW_SCHEMES and r["status"] == "ok" and np.isfinite(k):
+            p = piston_extrapolated(r, k, args.case)
+            p["c_p"] = c_p
             out_rows.append(p)
             out_rows.append({"case": args.case, "kind": "ratio", "scheme": r["scheme"],
                              "u_p": r["u_p"], "piston_over_window_cpu": p["cpu_s"] / r["cpu_s"],
                              "window_sim_time": r["sim_time"],
-                             "crossover_sim_time": crossover_time(r, c_p)})  # fmt: skip
+                             "crossover_sim_time": crossover_time(r, k)})  # fmt: skip
     args.out.mkdir(parents=True, exist_ok=True)
     lines = []
     for r in out_rows:
@@ -249,7 +274,7 @@ def main() -> None:
         lines.append(json.dumps(clean))
         print(lines[-1], flush=True)
     (args.out / f"relaxing_cost_{args.case}.jsonl").write_text("\n".join(lines) + "\n")
-    figure(out_rows, args.case, c_p, args.out)
+    figure(out_rows, args.case, k, args.out)
 
 
 if __name__ == "__main__":
