@@ -116,7 +116,8 @@ class ControlParams:
     window's length unit, as ``PistonFrame`` carries them for a piston run; ``ahead_gap``:
     the slab ahead's distance from the front (``shock.ahead_gap``; None: ``gap``);
     ``max_average_time``: how long a steady average (AMW/MW's, the dichotomy's final one)
-    may go on while its point is unresolved (``window.steady.steady_state``)."""
+    may go on while its point is unresolved (``window.steady.steady_state``); ``recentre``:
+    AMW brings the front back to ``target`` before its average (``window.methods.recentre``)."""
 
     window_time: float
     average_time: float
@@ -136,6 +137,7 @@ class ControlParams:
     avg_length: float
     max_average_time: float = 0.0
     ahead_gap: float | None = None
+    recentre: bool = False
 
     @classmethod
     def from_window(
@@ -160,6 +162,7 @@ class ControlParams:
             gain_position=float(w["mw"]["gain_position"]) / wt, target=w["front_fraction"],
             outflow_gap=w.get("outflow_gap") or gap, gap=gap, avg_length=avg_length,
             max_average_time=float(w.get("max_average_time") or 0.0), ahead_gap=ahead_gap,
+            recentre=bool(w["amw"].get("recentre", False)),
         )  # fmt: skip
 
 

@@ -24,6 +24,7 @@ from hugomap.window.methods import (
     amw,
     fixed_run,
     mw,
+    recentre,
     steered_out_scatter,
     steering_response,
 )
@@ -67,6 +68,20 @@ def test_amw_finds_the_front_speed(offset):
     assert f.u_out - f.u_in == pytest.approx(U_P, abs=1e-12)  # AMW never touches u_p
     assert abs(-f.u_in - D) <= 2 * _resolution(h)
     assert _resolution(h) < 0.15  # the noise allows 1.5 % of D here; the test means something
+
+
+def test_recentre_brings_the_front_back_and_keeps_the_frame():
+    """A steady front 0.3 L from its place (ω = 0.3, ω* = 0.6) in its own frame: the
+    excursion moves it by (ω* − ω) L exactly (no noise) and leaves u_in, u_out, hence u_p
+    and the frame's speed, as they were; |Δu| is held to half |u_in|. Within 0.02 of ω*
+    nothing is done."""
+    f = _front(-D, -D + U_P, front=0.3, noise=0.0)
+    sig = _signal(f)
+    du = recentre(f, sig, 0.6, sig(f), duration=0.5, every=EVERY)
+    assert sig(f) == pytest.approx(0.6, abs=1e-9)
+    assert (f.u_in, f.u_out) == pytest.approx((-D, -D + U_P), abs=1e-12)
+    assert abs(du) == pytest.approx(0.5 * D)  # 15 in 0.5 would be 30: T was lengthened
+    assert recentre(f, sig, 0.61, sig(f), duration=0.5, every=EVERY) == 0.0
 
 
 def test_mw_finds_the_amplitude_for_the_held_inflow():

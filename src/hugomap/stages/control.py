@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..failures import HugomapFailure
 from ..registry import backend as backend_of
-from ..window.methods import amw, mw
+from ..window.methods import amw, mw, recentre
 from ..window.steady import steady_state
 from .files import Clock, info_of, write_extras
 from .windows import failed_point, open_window, prior_cost, window_point
@@ -47,6 +47,8 @@ def control_point(
         else:
             res, hist = mw(win, sig, gain_rate=cp.gain_rate, gain_position=cp.gain_position,
                            target=cp.target, **common)  # fmt: skip
+        if res.converged and scheme == "amw" and cp.recentre:
+            recentre(win, sig, cp.target, hist.omega[-1], cp.window_time, cp.every)
         if res.converged:
             values, h = steady_state(win, profile, pole, sig, cp.average_time, cp.every,
                                      cp.gap, cp.avg_length, sh["residual_tol"],

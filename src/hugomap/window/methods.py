@@ -379,6 +379,30 @@ def amw(
     )  # fmt: skip
 
 
+def recentre(
+    solver, signal: OmegaSignal, target: float, omega: float, duration: float, every: int
+) -> float:
+    """Bring the front from ω = ``omega`` back to ω* = ``target`` by a Galilean excursion:
+    shift every velocity by Δu = L (ω* − ω)/T, run T = ``duration``, shift back by −Δu.
+    The front then moves by Δu T = (ω* − ω) L relative to the window while the material's
+    state, a function of relative velocities only, is unchanged; AMW's shifts are the same
+    transformation (the seed's Galilean shifts). T is lengthened so that |Δu| stays within
+    half |u_in| (the inflow stays an inflow). A front within 0.02 of ω* is left. Returns
+    Δu [velocity] (0 when left)."""
+    L = solver.geom.length
+    d = (target - omega) * L
+    if abs(target - omega) < 0.02 or not np.isfinite(d):
+        return 0.0
+    T = max(duration, abs(d) / (0.5 * abs(solver.u_in)))
+    du = d / T
+    solver.galilean_shift(du)
+    _, w = sample_omega(solver, signal, T, every)
+    solver.galilean_shift(-du)
+    log.info("recentre: omega %.3f -> %.3f (target %.3f) by a %.4g excursion over %.4g",
+             omega, float(w[-1]), target, du, T)  # fmt: skip
+    return du
+
+
 def mw(
     solver,
     signal: OmegaSignal,
