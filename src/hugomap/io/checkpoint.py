@@ -89,8 +89,9 @@ LAMMPS_CHECKPOINT = CheckpointKind(
     "a LAMMPS checkpoint", "format", "hugomap-lammps-checkpoint/1",
     family="hugomap-lammps-checkpoint/",
 )  # fmt: skip
-#: A moving window on LAMMPS (``md.window.MDWindow`` over a ``LammpsSimulation``): the
-#: LAMMPS checkpoint plus the reservoir snapshot and the window's boundaries. /1: first.
+#: A moving window on LAMMPS (``particles.window.ParticleWindow`` over a ``LammpsSimulation``,
+#: kit ``lammps.window.LammpsKit``): the LAMMPS checkpoint plus the reservoir snapshot and the
+#: window's boundaries. /1: first.
 LAMMPS_WINDOW_CHECKPOINT = CheckpointKind(
     "a LAMMPS window checkpoint", "window_format", "hugomap-lammps-window/1",
     inside=LAMMPS_CHECKPOINT, family="hugomap-lammps-window/",

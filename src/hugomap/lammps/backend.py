@@ -114,7 +114,7 @@ class MetalProfile:
         T    = ΣK_aa / (3 (c − 1) k_B)                                    [K]
         E    = (½ ΣK_aa + Σpe) / c            [eV/atom] → · eV/(m u_kg)    [J/kg]
 
-    (the MD backend's ``particles.profiles`` formulas with the mass and the unit factors)."""
+    (``particles.profiles``' formulas, the MD backend's too, with the mass and the unit factors)."""
 
     x0 = 0.0
 

@@ -468,8 +468,8 @@ class LammpsSimulation(PerAtomAccess):
         nbins = int(math.floor(self.L[0] / width + 1e-9))
         pe, vir = self.per_atom_energy_virial()
         out = np.zeros((nbins, len(SUM_FIELDS)))
-        # the MD backend's kernel: one binning rule for both (atoms stay at x >= 0, behind
-        # the reflecting piston, where its truncation is the floor)
+        # the particle backends' one kernel: one binning rule for both (atoms stay at x >= 0,
+        # behind the reflecting piston, where its truncation is the floor)
         x, v = self._x(), self._v()
         if not self._all_mobile:
             m = self._mobile()

@@ -37,8 +37,9 @@ STATUS_NAMES = {OK: "ok", GROW: "grow", NAN: "nan", CFL: "cfl", LOST: "atom_lost
 def kick(v: np.ndarray, f: np.ndarray, ids: np.ndarray, h: float) -> None:
     """v ← v + h F (m = 1) for every mobile atom; frozen atoms (ids < 0) keep their velocity.
 
-    Frozen atoms are the rigid boundary layers of the moving window (``md.window``): they move
-    at their own constant velocity and act on the mobile atoms through the pair forces."""
+    Frozen atoms are the rigid boundary layers of the moving window (``particles.window``):
+    they move at their own constant velocity and act on the mobile atoms through the pair
+    forces."""
     for i in prange(v.shape[0]):
         if ids[i] >= 0:
             v[i, 0] += h * f[i, 0]

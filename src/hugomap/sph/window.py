@@ -1,6 +1,8 @@
 """A moving observation window around a 1D CSPH simulation (``SPHWindow``): the window
-protocol of ``md.window.MDWindow`` in SI units, so that ``window.methods`` runs on SPH
-unchanged. Its checkpoint is the simulation's (``sph.checkpoint``) plus the window state.
+protocol (``window.protocol.WindowSolver``, which the particle window
+``particles.window.ParticleWindow`` implements too) in SI units, so that ``window.methods``
+runs on SPH unchanged. Its checkpoint is the simulation's (``sph.checkpoint``) plus the
+window state.
 """
 
 from __future__ import annotations
@@ -59,7 +61,8 @@ class SPHWindowGeometry:
 
 class SPHWindow:
     """A moving observation window around a 1D ``CSPHSimulation`` (the protocol of
-    ``md.window.MDWindow``, SI units, per unit cross-section: ``area`` = 1 m²).
+    ``window.protocol.WindowSolver``, as ``particles.window.ParticleWindow``; SI units, per
+    unit cross-section: ``area`` = 1 m²).
 
     Frame: the window's. Inflow: beyond x_hi, ``n_inflow`` frozen particles of fresh material
     at the initial state (ρ0, e0, S = 0, spacing dx0) move rigidly at u_in < 0; one that

@@ -2,7 +2,7 @@
 the dichotomy, and the steady-state measurement shared by all of them.
 
 The solver is any object with the window protocol (``window.protocol.WindowSolver``:
-``md.window.MDWindow``, ``sph.window.SPHWindow``, …).
+``particles.window.ParticleWindow`` over numba MD or LAMMPS, ``sph.window.SPHWindow``, …).
 
 Front signal (SEED-en.md, reading notes). With the window [x_lo, x_hi] of length L holding
 upstream material (density ρ0, stress P0) ahead of the front x_f and shocked material (ρ1, P1)
