@@ -6,7 +6,7 @@ A stage (``hugomap.stages``) never reads ``scene["solver"]``: it asks the regist
 backend owns its units (LJ reduced units for MD, SI for CSPH), its kernels, its checkpoint
 layout and its cost model; what it hands back is neutral (``hugomap.states``): a ``Pole``, a
 ``PistonFrame``, a ``Profile`` reader, ``ControlParams`` and ``Resources``. The methods
-(``hugomap.window``) drive the solver it returns through ``window.protocol.ShockSolver`` and
+(``hugomap.methods``) drive the solver it returns through ``methods.protocol.ShockSolver`` and
 ``WindowSolver``.
 """
 
@@ -20,8 +20,8 @@ from typing import Any, Protocol
 import xarray as xr
 
 from .io.dataset import UnitTable
+from .methods.protocol import ShockSolver, WindowSolver
 from .states import ControlParams, PistonFrame, Pole, Profile, Resources, WindowStart
-from .window.protocol import ShockSolver, WindowSolver
 
 
 @dataclass

@@ -116,8 +116,8 @@ class ControlParams:
     window's length unit, as ``PistonFrame`` carries them for a piston run; ``ahead_gap``:
     the slab ahead's distance from the front (``shock.ahead_gap``; None: ``gap``);
     ``max_average_time``: how long a steady average (AMW/MW's, the dichotomy's final one)
-    may go on while its point is unresolved (``window.steady.steady_state``); ``recentre``:
-    AMW brings the front back to ``target`` before its average (``window.methods.recentre``)."""
+    may go on while its point is unresolved (``methods.steady.steady_state``); ``recentre``:
+    AMW brings the front back to ``target`` before its average (``methods.control.recentre``)."""
 
     window_time: float
     average_time: float
@@ -224,7 +224,7 @@ class WindowStart:
     material, its ω signal (normalised by that pole and the shocked state), and attributes
     to keep in the window checkpoint."""
 
-    window: Any  # window.protocol.WindowSolver
+    window: Any  # methods.protocol.WindowSolver
     pole: Pole
-    signal: Any  # window.methods.OmegaSignal
+    signal: Any  # methods.control.OmegaSignal
     attrs: dict[str, Any] = field(default_factory=dict)

@@ -86,7 +86,7 @@ DICHOTOMY_KEYS = {"k", "bracket", "pending", "done", "status"}
 
 
 def dichotomy_progress(folder: Path) -> dict[str, Any] | None:
-    """The latest dichotomy loop state (``window.dichotomy``: a JSON object with k, bracket,
+    """The latest dichotomy loop state (``methods.dichotomy``: a JSON object with k, bracket,
     pending, done, status) found under a point folder, or None. Found by its keys, not its
     file name, so any layout of the state files under the point folder works."""
     best = None

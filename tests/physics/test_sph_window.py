@@ -2,7 +2,7 @@
 
 Set-up: a copper piston run (no strength, u_p = 1000 m/s, 400 particles of 10 µm) until the
 front is half-way; a window of 150 particles around the front in a frame moving 3 % slower
-than the reference front speed (D_guess = 0.97 (c0 + s u_p)). AMW (``window.methods.amw``,
+than the reference front speed (D_guess = 0.97 (c0 + s u_p)). AMW (``methods.control.amw``,
 β = 0.5, ω from the particle count normalised by the upstream and Hugoniot densities,
 averaging windows of L/Us, front-speed resolution 0.5 % of Us) shifts the frame until the
 front stops. Reference: Us = c0 + s u_p = 5430 m/s (exact for the EOS). Tolerance 1 %, the
@@ -20,10 +20,10 @@ import pytest
 
 from hugomap.eos import copper
 from hugomap.eos.mie_gruneisen import hugoniot_state
+from hugomap.methods.control import OmegaSignal, amw
 from hugomap.sph.simulation import CSPHSimulation
 from hugomap.sph.state import SPHState
 from hugomap.sph.window import SPHWindow
-from hugomap.window.methods import OmegaSignal, amw
 
 DX = 1e-5
 

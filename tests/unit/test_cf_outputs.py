@@ -68,7 +68,7 @@ def _md_config(units: dict | None = ARGON, u_p=(1.5, 2.5)) -> dict:
 
 
 class _Control:
-    """A control record (``window.methods.ControlHistory``'s arrays) of three windows."""
+    """A control record (``methods.control.ControlHistory``'s arrays) of three windows."""
 
     t = [0.6, 1.2, 1.8]
 

@@ -1,4 +1,4 @@
-"""The dichotomy's loop state (hugomap.window.dichotomy) on synthetic slopes.
+"""The dichotomy's loop state (hugomap.methods.dichotomy) on synthetic slopes.
 
 Reference: a linear ⟨dω/dt⟩(u_out) = c (u_out − u*) with a known root u*; bisection must end
 with a bracket narrower than the tolerance that contains u*, and the regula-falsi root of a
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from hugomap.window import dichotomy as dich
+from hugomap.methods import dichotomy as dich
 
 P = dich.DichotomyParams(
     half_width=0.4, growth=1.0, max_expansions=4, max_iterations=20, tolerance=0.01

@@ -12,10 +12,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from hugomap.methods.piston import History
 from hugomap.stages.load import LoadingProgress
 from hugomap.stages.piston import loading_rate, log_drive_start
 from hugomap.stages.piston import log_progress as _log_progress
-from hugomap.window.piston import History
 
 
 class _Sim:

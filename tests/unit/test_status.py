@@ -448,7 +448,7 @@ def test_every_failure_status_the_code_emits_is_registered():
     for f in src.rglob("*.py"):
         found.update(pattern.findall(f.read_text()))
     found.update(
-        re.findall(r'return "(diverged|oscillating)"', (src / "window" / "methods.py").read_text())
+        re.findall(r'return "(diverged|oscillating)"', (src / "methods" / "control.py").read_text())
     )
     from hugomap.md.integrate import STATUS_NAMES
 

@@ -1,13 +1,13 @@
 """The steady average of a window point goes on while its point is unresolved
-(``window.steady.steady_state``, ``unresolved``), on a held front with noisy slabs."""
+(``methods.steady.steady_state``, ``unresolved``), on a held front with noisy slabs."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from hugomap.methods.control import OmegaSignal
+from hugomap.methods.steady import steady_state, unresolved
 from hugomap.states import Pole, SlabState
-from hugomap.window.methods import OmegaSignal
-from hugomap.window.steady import steady_state, unresolved
 
 D, U_P = 3.0, 1.0
 POLE = Pole(rho0=1.0, P0=1.0, E0=0.0, T0=1.0, Pyy0=1.0, rho0_err=0.0, P0_err=0.0, E0_err=0.0,

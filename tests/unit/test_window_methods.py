@@ -1,6 +1,6 @@
 """AMW, MW and the dichotomy on a synthetic front whose answer is known exactly.
 
-Reference: ``hugomap.window.synthetic.SyntheticFront``, a front obeying D = c0 + s u_p
+Reference: ``hugomap.methods.synthetic.SyntheticFront``, a front obeying D = c0 + s u_p
 (c0 = 7, s = 1.5) in a window of L = 50; the steady frame for u_p = 2 is u_in = −10, and with
 u_in = −10 held the steady outflow is u_out = −8. The methods see only ω (the normalised atom
 count, with noise), through the same protocol as the MD window.
@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from hugomap.analysis.stats import CorrelatedSlope, line_fit
-from hugomap.window import dichotomy as dich
-from hugomap.window.methods import (
+from hugomap.methods import dichotomy as dich
+from hugomap.methods.control import (
     ControlHistory,
     OmegaSignal,
     _diverging,
@@ -28,7 +28,7 @@ from hugomap.window.methods import (
     steered_out_scatter,
     steering_response,
 )
-from hugomap.window.synthetic import SyntheticFront
+from hugomap.methods.synthetic import SyntheticFront
 
 C0, S, U_P = 7.0, 1.5, 2.0
 D = C0 + S * U_P  # 10: the exact front speed for u_p = 2

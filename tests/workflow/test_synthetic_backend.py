@@ -37,7 +37,7 @@ def test_the_backend_lives_in_its_folder_and_one_registry_line() -> None:
     mentions = [p for p in src.rglob("*.py") if "synthetic" in p.read_text()
                 and "synthetic" not in p.relative_to(src).parts[0]
                 and p.name not in ("registry.py", "synthetic.py")]  # fmt: skip
-    # window/synthetic.py is the methods' own test front the backend builds on
+    # methods/synthetic.py is the methods' own test front the backend builds on
     assert mentions == [], mentions
 
 

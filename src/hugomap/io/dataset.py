@@ -417,7 +417,7 @@ def with_si(ds: xr.Dataset, scene: Mapping) -> xr.Dataset:
 
 
 def control_vars(history, units: UnitTable) -> dict:
-    """The control loop's record (``window.methods.ControlHistory``) as dataset variables:
+    """The control loop's record (``methods.control.ControlHistory``) as dataset variables:
     per averaging window k ``control_{t, a, a_err, omega, u_in, u_out, du}`` and the raw ω
     samples ``omega_t``, ``omega_value``, in the backend's units."""
     time_unit, velocity_unit = units.axes["time"], units.axes["velocity"]
@@ -439,7 +439,7 @@ def control_vars(history, units: UnitTable) -> dict:
 
 
 def profile_vars(profile: dict[str, np.ndarray], units: UnitTable) -> dict:
-    """The steady window profile (``window.steady.mean_profile``) as ``profile_*`` variables
+    """The steady window profile (``methods.steady.mean_profile``) as ``profile_*`` variables
     along ``bin``; fields without a unit in the table are left out."""
     return {f"profile_{k}": ("bin", v, {"units": units.profile[k][0],
                                         "long_name": units.profile[k][1]})

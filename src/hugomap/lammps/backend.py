@@ -26,7 +26,7 @@ sizes a fluid's box so its bulk is at ρ0 and ends at the canonical mean energy 
 an NVE run measures the pole away from the walls (block averages, ``analysis.stats``).
 The piston runs in the MD backend's frame (drift removed, every atom at −u_p, the piston
 wall at rest, the far wall moving at −u_p with the upstream material), so u_p is exact and
-the shared analysis (``window.piston``, ``analysis.shock.measure_point``) measures the point
+the shared analysis (``methods.piston``, ``analysis.shock.measure_point``) measures the point
 from the profile sums (``particles.profiles.SUM_FIELDS``, read by
 ``particles.profiles.ParticleProfile``, the MD backend's reader too).
 
@@ -407,9 +407,9 @@ class LammpsBackend:
         ``u_p``, ``D_guess`` arrive in the frame's units (metal: SI) and are converted to
         the simulation's; the returned window, pole and ω are in the frame's. A crystal's
         reservoir and seam are at the sample's lattice (``_lattice_density``)."""
+        from ..methods.control import OmegaSignal
         from ..particles.reservoir import inflow_screen, make_reservoir
         from ..particles.window import ParticleWindow
-        from ..window.methods import OmegaSignal
         from .simulation import native
         from .window import LammpsKit
 

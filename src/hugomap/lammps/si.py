@@ -1,5 +1,5 @@
 """What crosses the seam from a units-metal LAMMPS run, in SI: ``SIView`` (a simulation,
-``window.protocol.ShockSolver``) and ``WindowSIView`` (a window, ``WindowSolver``). The
+``methods.protocol.ShockSolver``) and ``WindowSIView`` (a window, ``WindowSolver``). The
 simulation or window underneath keeps LAMMPS's units (Å, ps) and its raw profile sums (read
 by ``backend.MetalProfile``, which converts them). Each conversion is one factor of
 ``units.UnitSystem``: time and dt [s] = [ps]·time_s; velocities, u_in, u_out [m/s] =
@@ -20,7 +20,7 @@ from .simulation import LammpsSimulation
 
 class SIView:
     """A units-metal ``LammpsSimulation`` seen in SI by the shock methods
-    (``window.protocol.ShockSolver``): time [s], wall positions [m], velocities [m/s]; the
+    (``methods.protocol.ShockSolver``): time [s], wall positions [m], velocities [m/s]; the
     simulation underneath (``sim``) keeps LAMMPS's units (Å, ps) and its raw profile sums
     (read by ``backend.MetalProfile``, which converts them). Each conversion is one factor
     of ``units.UnitSystem``: t = t_ps · time_s, x = x_Å · length_m, u = u_Å/ps ·

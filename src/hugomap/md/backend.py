@@ -240,8 +240,8 @@ class MDBackend:
         set-up transient: new boundaries, the first seam), then ω is normalised by the pole
         (ρ0, P0) and the shocked slab between the outflow edge and the front (``shock.gap``
         clear of both)."""
+        from ..methods.control import OmegaSignal
         from ..particles.reservoir import inflow_screen, make_reservoir
-        from ..window.methods import OmegaSignal
         from .kit import MDKit
         from .window import MDWindow
 

@@ -133,7 +133,7 @@ class ParticleWindow:
     (``ParticleKit``) describes. A window made without a kit asks ``default_kit`` for one:
     none here; ``md.window.MDWindow`` gives the numba MD's.
 
-    Implements the window protocol of ``window.methods`` in the window frame: ``advance``,
+    Implements the window protocol (``methods.protocol``) in the window frame: ``advance``,
     ``galilean_shift``, ``set_outflow``, ``count_in_window``, ``profile_sums``, checkpoints.
     ``res_x``/``res_v`` (N_res, 3): the reservoir snapshot (positions in [0, L_r) along x,
     thermal velocities in its rest frame); ``x_face_in``/``x_face``: the faces of the frozen

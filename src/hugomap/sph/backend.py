@@ -253,7 +253,7 @@ class CSPHBackend:
 
     def _open_window(self, solver, scene, u_p, front, D_guess, pole, info) -> WindowStart:
         from ..analysis.shock import bin_edges, slab_state
-        from ..window.methods import OmegaSignal
+        from ..methods.control import OmegaSignal
         from .window import SPHWindow, SPHWindow2D
 
         w, sh = scene["window"], scene["shock"]

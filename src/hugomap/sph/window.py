@@ -1,6 +1,6 @@
 """A moving observation window around a 1D CSPH simulation (``SPHWindow``): the window
-protocol (``window.protocol.WindowSolver``, which the particle window
-``particles.window.ParticleWindow`` implements too) in SI units, so that ``window.methods``
+protocol (``methods.protocol.WindowSolver``, which the particle window
+``particles.window.ParticleWindow`` implements too) in SI units, so that ``hugomap.methods``
 runs on SPH unchanged. Its checkpoint is the simulation's (``sph.checkpoint``) plus the
 window state.
 """
@@ -61,7 +61,7 @@ class SPHWindowGeometry:
 
 class SPHWindow:
     """A moving observation window around a 1D ``CSPHSimulation`` (the protocol of
-    ``window.protocol.WindowSolver``, as ``particles.window.ParticleWindow``; SI units, per
+    ``methods.protocol.WindowSolver``, as ``particles.window.ParticleWindow``; SI units, per
     unit cross-section: ``area`` = 1 m²).
 
     Frame: the window's. Inflow: beyond x_hi, ``n_inflow`` frozen particles of fresh material

@@ -2,7 +2,7 @@
 
 Every stage is solver-agnostic: it asks the registry for the scene's backend
 (``hugomap.registry``) and drives it through the ``Backend`` protocol and the methods of
-``hugomap.window``. A stage whose solver breaks still writes its output, marked with a
+``hugomap.methods``. A stage whose solver breaks still writes its output, marked with a
 ``status`` and a ``diagnostic``, so the aggregate keeps the point, marked failed.
 
     prepare_sample ─▶ load_to_target ─┬─ piston_point
@@ -21,7 +21,7 @@ _STAGES = {
     "aggregate": "aggregation", "control_point": "control", "dichotomy_point": "dichotomy",
     "dichotomy_state": "dichotomy", "dichotomy_trial": "dichotomy", "load_to_target": "load",
     "piston_point": "piston", "prepare_sample": "sample", "reference_stage": "reference",
-    "shock_frame_point": "shockframe", "window_start": "window",
+    "shock_frame_point": "shockframe", "window_start": "window_cut",
 }  # fmt: skip
 __all__ = sorted(_STAGES)
 

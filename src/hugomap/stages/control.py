@@ -1,5 +1,5 @@
 """Stage ``amw``/``mw``: a control scheme until the front is steady, then the steady
-average (``window.steady.steady_state``)."""
+average (``methods.steady.steady_state``)."""
 
 from __future__ import annotations
 
@@ -8,11 +8,11 @@ import os
 from pathlib import Path
 
 from ..failures import HugomapFailure
+from ..methods.control import amw, mw, recentre
+from ..methods.steady import steady_state
 from ..registry import backend as backend_of
-from ..window.methods import amw, mw, recentre
-from ..window.steady import steady_state
 from .files import Clock, info_of, write_extras
-from .windows import failed_point, open_window, prior_cost, window_point
+from .window_files import failed_point, open_window, prior_cost, window_point
 
 log = logging.getLogger("hugomap")
 
@@ -20,8 +20,8 @@ log = logging.getLogger("hugomap")
 def control_point(
     window0: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike, scheme: str
 ) -> Path:
-    """An AMW point (``window.methods.amw``: the amplitude u_p = u_out − u_in held, the frame
-    shifted by −β L a_k) or an MW point (``window.methods.mw``: the inflow, so D = −u_in,
+    """An AMW point (``methods.control.amw``: the amplitude u_p = u_out − u_in held, the frame
+    shifted by −β L a_k) or an MW point (``methods.control.mw``: the inflow, so D = −u_in,
     held and u_out steered) until steady, then the steady average. MW's amplitude settles to
     the u_p whose shock runs at the held D: its point is (D, u_p_set)."""
     b = backend_of(scene)

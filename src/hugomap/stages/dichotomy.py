@@ -1,8 +1,8 @@
-"""Stages of the dichotomy (``window.dichotomy``): the loop state, one trial, the point.
+"""Stages of the dichotomy (``methods.dichotomy``): the loop state, one trial, the point.
 
 Every trial is an independent run from the window checkpoint at one outflow velocity u_out
 (a Galilean shift: the amplitude u_p = u_out − u_in held, the frame moves), measuring
-⟨dω/dt⟩ (``window.methods.fixed_run``); the loop state is a small JSON file per iteration;
+⟨dω/dt⟩ (``methods.control.fixed_run``); the loop state is a small JSON file per iteration;
 the point is the steady average at the bisection's root.
 """
 
@@ -17,12 +17,12 @@ import numpy as np
 
 from ..failures import HugomapFailure
 from ..io.atomic import write_json
+from ..methods import dichotomy as dich
+from ..methods.control import fixed_run
+from ..methods.steady import steady_state
 from ..registry import backend as backend_of
-from ..window import dichotomy as dich
-from ..window.methods import fixed_run
-from ..window.steady import steady_state
 from .files import Clock, info_of, open_dataset, write_extras
-from .windows import failed_point, open_window, prior_cost, window_point
+from .window_files import failed_point, open_window, prior_cost, window_point
 
 log = logging.getLogger("hugomap")
 

@@ -14,8 +14,8 @@ import xarray as xr
 
 from ..io.atomic import mpi_size, write_netcdf
 from ..io.dataset import point_dataset, scalar_vars
+from ..methods.piston import History
 from ..states import Pole
-from ..window.piston import History
 
 log = logging.getLogger("hugomap")
 INFO_ATTR = "backend_info"  # the backend's sample info (JSON), carried by every checkpoint

@@ -12,10 +12,10 @@ from pathlib import Path
 import xarray as xr
 
 from ..failures import HugomapFailure
+from ..methods.piston import History
+from ..methods.piston import load_to_target as run_loading
 from ..registry import backend as backend_of
 from ..states import PistonFrame, Pole
-from ..window.piston import History
-from ..window.piston import load_to_target as run_loading
 from .files import INFO_ATTR, Clock, failure, history_vars, info_of, is_ok, open_dataset, pole_vars
 
 log = logging.getLogger("hugomap")
@@ -26,7 +26,7 @@ class LoadingProgress:
     """The loading stage's progress lines: one when it starts, one as the front passes each
     fraction of ``LOAD_MARKS`` of the loading distance (step, simulated time, front, ETA), a
     few lines whatever the number of samples. Call it after each sample
-    (``window.piston.run_stage``'s ``on_sample``); ``wall()`` is the job's wall time [s].
+    (``methods.piston.run_stage``'s ``on_sample``); ``wall()`` is the job's wall time [s].
 
     Rates are counted from the first sample on, so the first chunk's one-off costs (numba
     compiling its kernels on a cold cache: tens of seconds) do not enter the ETA nor
@@ -79,7 +79,7 @@ def load_to_target(
     sample: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike
 ) -> Path:
     """From the prepared sample, set the piston going at ``u_p`` (``Backend.start_piston``)
-    and drive it (``window.piston.load_to_target``) until the front has travelled
+    and drive it (``methods.piston.load_to_target``) until the front has travelled
     ``shock.load_fraction`` of the sample; save the state with its history and pole."""
     b = backend_of(scene)
     clock = Clock()

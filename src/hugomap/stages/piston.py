@@ -20,9 +20,9 @@ import xarray as xr
 
 from ..analysis.shock import measure_point
 from ..failures import CheckpointError, HugomapFailure
+from ..methods.piston import History, drive, steady_track
 from ..registry import backend as backend_of
 from ..states import PistonFrame, Pole
-from ..window.piston import History, drive, steady_track
 from .files import (
     INFO_ATTR,
     Clock,
@@ -185,7 +185,7 @@ def piston_point(
     scheme: str = "piston",
 ) -> Path:  # fmt: skip
     """Continue the piston from ``loaded`` (or its partial checkpoint) until the front is
-    ``rear_margin`` from the far end (``window.piston.drive``), measure the point over the
+    ``rear_margin`` from the far end (``methods.piston.drive``), measure the point over the
     drive samples, write the backend's extras (snapshots) and the point file."""
     b = backend_of(scene)
     sh = scene["shock"]

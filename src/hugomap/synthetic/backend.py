@@ -97,7 +97,7 @@ class SyntheticBackend:
         """The window in the frame of ``D_guess`` (u_in = −D_guess, u_out = u_p − D_guess),
         the front at ``window.front_fraction``, settled for ``window.settle_time``; ω from
         the particle count, normalised by ρ0 and the exact shocked density."""
-        from ..window.methods import OmegaSignal
+        from ..methods.control import OmegaSignal
 
         w = scene["window"]
         win = SyntheticWindow(scene["material"], -D_guess, u_p - D_guess, w["length"],

@@ -5,7 +5,7 @@ amplitude u_p the state (ρ1, P1, E1) satisfies the three jump conditions exactl
 (``shocked_state``). Units are arbitrary but consistent; no equation of motion is solved.
 
 Piston run (lab frame): the sample fills [0, L] across the area A; a piston started at x_p0
-moves at u_p, and the front, which starts on the piston, at D. Window: ``window.synthetic``'s
+moves at u_p, and the front, which starts on the piston, at D. Window: ``methods.synthetic``'s
 ``SyntheticFront`` (the front moves at u_in + c0 + s u_p in the window frame), given the
 profile, boundaries and checkpoint a stage needs. Profile sums, per bin of width w from x0:
 count (mass over the particle mass ``m``), mass, x momentum, mass·E, P·volume, volume.
@@ -24,7 +24,7 @@ import xarray as xr
 from ..analysis.linear_hugoniot import jump_state
 from ..io.atomic import write_netcdf
 from ..io.checkpoint import CheckpointKind, seal_checkpoint, verify_checkpoint
-from ..window.synthetic import SyntheticFront
+from ..methods.synthetic import SyntheticFront
 
 PISTON = CheckpointKind(
     "a synthetic piston checkpoint", "synthetic_format", "hugomap-synthetic-piston/1"

@@ -25,7 +25,7 @@ from ..analysis.shock import (
 )
 from ..analysis.stats import CorrelatedSlope, slope_scatter
 from ..states import Pole, Profile
-from .methods import OmegaSignal, flat_omega_error
+from .control import OmegaSignal, flat_omega_error
 from .protocol import WindowSolver
 
 

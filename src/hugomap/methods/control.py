@@ -1,7 +1,8 @@
-"""Moving-window methods, written once for every solver: the ω signal, AMW, MW, fixed runs for
-the dichotomy, and the steady-state measurement shared by all of them.
+"""The moving window's control, written once for every solver: the ω signal, AMW and MW's
+control loop, and the fixed runs of the dichotomy (the steady average that follows them:
+``methods.steady``).
 
-The solver is any object with the window protocol (``window.protocol.WindowSolver``:
+The solver is any object with the window protocol (``methods.protocol.WindowSolver``:
 ``particles.window.ParticleWindow`` over numba MD or LAMMPS, ``sph.window.SPHWindow``, …).
 
 Front signal (SEED-en.md, reading notes). With the window [x_lo, x_hi] of length L holding

@@ -62,7 +62,7 @@ class WindowGeometry(Protocol):
 
 
 class WindowSolver(ShockSolver, Protocol):
-    """What the window methods (``window.methods``, ``window.steady``) need of a moving
+    """What the window methods (``methods.control``, ``methods.steady``) need of a moving
     window: the inflow velocity ``u_in`` at x_hi and the outflow velocity ``u_out`` at x_lo
     (window frame), so that u_p = u_out − u_in; ``geom``; the transverse ``area``; the time
     step ``dt``; the particle count inside the window (the ω signal); and ``set_outflow``

@@ -8,9 +8,9 @@ from pathlib import Path
 
 from ..failures import StageFailed
 from ..io.dataset import control_vars, profile_vars
+from ..methods.control import ControlHistory, OmegaSignal
+from ..methods.steady import mean_profile
 from ..states import Pole
-from ..window.methods import ControlHistory, OmegaSignal
-from ..window.steady import mean_profile
 from .files import info_of, is_ok, open_dataset, write_point
 
 
