@@ -97,6 +97,8 @@ def point_row(path: Path, case: str) -> dict | None:
             "P_rel_err": _scalar(ds, "P_err") / abs(_scalar(ds, "P") - _scalar(ds, "P0")),
             "average_time": _scalar(ds, "average_time"),
         }
+        if scene.get("solver") == "csph" and "alpha" in ds:
+            row.update(_compaction_reference(ds, scene))
     loaded = path.with_name("loaded.nc")
     t0 = _drive_start(loaded) if loaded.exists() else float("nan")
     if t.size:
@@ -105,6 +107,31 @@ def point_row(path: Path, case: str) -> dict | None:
         row["sim_time"] = float(t[-1] - t0)
     row["_scene"] = scene
     return row
+
+
+def _compaction_reference(ds: xr.Dataset, scene: dict) -> dict:
+    """A porous point's slab (u_p, α, P) and the Hugoniot at its own distention
+    (``CSPHBackend.point_references``) with McQueen's full compaction at its u_p [SI]."""
+    from hugomap.analysis.porous import MGSolid, porous_hugoniot_from_up
+    from hugomap.sph.backend import CSPHBackend
+
+    keys = ("alpha", "alpha_err", "u_p_jump", "u_p_jump_err", "u_p_measured",
+            "u_p_measured_err", "rho0")  # fmt: skip
+    one = xr.Dataset({k: ((), _scalar(ds, k)) for k in keys})
+    ref = CSPHBackend().point_references(one, scene)
+    e = scene["material"]["eos"]
+    u = _scalar(ds, "u_p_jump")
+    u = u if np.isfinite(u) else _scalar(ds, "u_p_measured")
+    alpha0 = e["rho0"] / _scalar(ds, "rho0")
+    solid = MGSolid(e["rho0"], e["c0"], e["s"], e["gamma0"])
+    full = porous_hugoniot_from_up(u, alpha0, solid) if u > 0 else None
+    return {
+        "u_p_slab": u, "alpha": _scalar(ds, "alpha"), "alpha_err": _scalar(ds, "alpha_err"),
+        "D_err": _scalar(ds, "D_err"), "P": _scalar(ds, "P"), "P_err": _scalar(ds, "P_err"),
+        "D_ref": float(ref["D_compaction_ref"]), "D_ref_err": float(ref["D_compaction_ref_err"]),
+        "P_ref": float(ref["P_compaction_ref"]), "P_ref_err": float(ref["P_compaction_ref_err"]),
+        "D_full_compaction": float(full.D) if full else float("nan"), "alpha0": alpha0,
+    }  # fmt: skip
 
 
 def sample_length(scene: dict) -> float:
