@@ -40,18 +40,26 @@ def resolve_defaults(scene: dict) -> None:
     scene["window"].setdefault("cut_every", 10.0 * dx)
 
 
+# the window points' D of porous copper lay up to 1 % below McQueen's full compaction
+# (500 m/s, dx = 10 um): sizing allows three times that
+SLOW_FRONT_MARGIN = 0.03
+
+
 def slowest_front(scene: dict, u_p: float) -> float:
     """The slowest shock speed D [m/s] the scene's material may have at piston speed
     ``u_p`` [m/s], for sizing: the linear Hugoniot D = c0 + s u_p of its EOS; porous (dim
-    2), at most the snowplow speed u_p α/(α − 1) of full compaction to the solid density
-    (McQueen's limit; a compaction left incomplete runs faster, so room is not
-    overestimated)."""
+    2), at most McQueen's full compaction of its EOS (``analysis.porous``: below the
+    snowplow speed u_p α/(α − 1) once the solid itself compresses; a compaction left
+    incomplete runs faster, so room is not overestimated), less ``SLOW_FRONT_MARGIN``."""
     eos = scene["material"]["eos"]
     D = shock_velocity(u_p, eos["c0"], eos["s"])
     por = scene["sample"].get("porous") if scene["dim"] == 2 else None
     if por is not None and por["distention"] > 1.0:
-        a = por["distention"]
-        D = min(D, u_p * a / (a - 1.0))
+        from ..analysis.porous import MGSolid, porous_hugoniot_from_up
+
+        solid = MGSolid(eos["rho0"], eos["c0"], eos["s"], eos["gamma0"])
+        full = float(porous_hugoniot_from_up(u_p, por["distention"], solid).D)
+        D = min(D, full) * (1.0 - SLOW_FRONT_MARGIN)
     return D
 
 
