@@ -18,7 +18,8 @@ import pytest
 from hugomap.md.potential import LJParams
 from hugomap.md.sample import fcc_state
 from hugomap.md.simulation import MDSimulation
-from hugomap.particles.profiles import SUM_FIELDS, bin_sums, fields_from_sums
+from hugomap.particles.bins import bin_sums
+from hugomap.particles.profiles import SUM_FIELDS, fields_from_sums
 
 from ._reference import EPS
 

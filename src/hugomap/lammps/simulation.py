@@ -463,7 +463,8 @@ class LammpsSimulation(PerAtomAccess):
         units (velocities [σ/τ | Å/ps], energies [ε | eV]; no mass: the reader multiplies),
         of the mobile atoms (a frozen partner's share of a pair's energy and virial is not
         counted, as in the MD backend)."""
-        from ..particles.profiles import SUM_FIELDS, bin_sums
+        from ..particles.bins import bin_sums
+        from ..particles.profiles import SUM_FIELDS
 
         nbins = int(math.floor(self.L[0] / width + 1e-9))
         pe, vir = self.per_atom_energy_virial()

@@ -22,7 +22,8 @@ from ..failures import SolverUnstable
 from ..io.atomic import write_netcdf
 from ..io.checkpoint import MD_CHECKPOINT, read_checkpoint, seal_checkpoint, verify_checkpoint
 from ..numba_conf import num_threads
-from ..particles.profiles import SUM_FIELDS, bin_sums
+from ..particles.bins import bin_sums
+from ..particles.profiles import SUM_FIELDS
 from . import integrate as ig
 from .forces import energy_virial_full
 from .neighbor import build_full_list, cell_of, counting_sort, grid_shape

@@ -3,7 +3,7 @@
 
 - ``fcc``: an FCC lattice and Maxwell velocities (a sample's, a reservoir's first state);
 - ``sizing``: the equilibration between walls that sizes a sample's box (``size_bulk``);
-- ``profiles``: the per-bin sums (``bin_sums``, the one binning kernel), the fields made
+- ``bins``: the per-bin sums (``bin_sums``, the one binning kernel); ``profiles``: the fields made
   of them and the profile reader (``ParticleProfile``);
 - ``pole``: the pole measured on a prepared sample (``measure_pole``) and the pole a
   reference is computed at (``reference_pole``);

@@ -1,7 +1,8 @@
 """Profiles along x: number density, velocity, pressure tensor, temperature, energy per atom,
-for both particle backends: the one binning kernel (``bin_sums``, which the numba MD and
-LAMMPS's per-atom arrays both go through), the fields made of its sums
-(``fields_from_sums``) and the profile reader the shock methods use (``ParticleProfile``).
+for both particle backends: the fields made of the per-bin sums (``fields_from_sums``; the
+sums themselves by the one binning kernel ``particles.bins.bin_sums``, which the numba MD
+and LAMMPS's per-atom arrays both go through) and the profile reader the shock methods use
+(``ParticleProfile``). No numba here: the aggregation and the reader load without it.
 
 Atoms are binned by x into slabs of width w [σ] across the full transverse area A = L_y L_z.
 For a slab with c atoms, volume V_b = A w (m = 1, k_B = 1):
@@ -17,34 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..numba_conf import njit
 from ..states import SlabState
 
 # Columns of the raw per-bin sums.
 SUM_FIELDS = ("count", "vx", "vy", "vz", "vxx", "vyy", "vzz", "pe", "wxx", "wyy", "wzz")
-
-
-@njit
-def bin_sums(
-    x: np.ndarray, v: np.ndarray, pe: np.ndarray, vir: np.ndarray, width: float, out: np.ndarray
-) -> None:
-    """Accumulate (+=) the raw per-bin sums of ``SUM_FIELDS`` into ``out`` (nbins, 11)."""
-    nbins = out.shape[0]
-    for i in range(x.shape[0]):
-        b = int(x[i, 0] / width)
-        if b < 0 or b >= nbins:
-            continue
-        out[b, 0] += 1.0
-        out[b, 1] += v[i, 0]
-        out[b, 2] += v[i, 1]
-        out[b, 3] += v[i, 2]
-        out[b, 4] += v[i, 0] * v[i, 0]
-        out[b, 5] += v[i, 1] * v[i, 1]
-        out[b, 6] += v[i, 2] * v[i, 2]
-        out[b, 7] += pe[i]
-        out[b, 8] += vir[i, 0]
-        out[b, 9] += vir[i, 1]
-        out[b, 10] += vir[i, 2]
 
 
 def fields_from_sums(sums: np.ndarray, bin_volume: float) -> dict[str, np.ndarray]:
