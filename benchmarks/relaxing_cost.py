@@ -194,6 +194,12 @@ def crossover_time(win: dict, k: float) -> float:
     return 0.5 * (lo + hi)
 
 
+def _label(root: Path) -> str:
+    """A results folder as the rows name it: as given when relative, else its last two
+    parts (a scratch folder's full path means nothing to a reader of the rows)."""
+    return str(root) if not root.is_absolute() else "/".join(root.parts[-2:])
+
+
 def collect(roots: list[Path], case: str, scenes: list[str]) -> list[dict]:
     """The point rows of ``scenes`` (results/<scene>/up*/<scheme>.nc) under each root,
     labelled ``case``, each with its root and scene."""
@@ -204,7 +210,7 @@ def collect(roots: list[Path], case: str, scenes: list[str]) -> list[dict]:
                 if path.stem in ("piston", *WINDOW_SCHEMES):
                     r = point_row(path, case)
                     if r is not None:
-                        r.update(root=str(root), scene=scene)
+                        r.update(root=_label(root), scene=scene)
                         rows.append(r)
     return rows
 
