@@ -132,9 +132,9 @@ def test_bad_arguments_are_refused():
         MGSolid(8930.0, 3940.0, 1.49, -1.0)
 
 
-# The partial-compaction state: its bisection runs 200 halvings of a bracket below 1/s, far
-# past one ulp of η, so it meets the closed forms to the same few ulp (RTOL); volume
-# differences lose the same digits as above (RTOL_DV).
+# The partial-compaction state: solved for η to one ulp as the full-compaction one is, so
+# it meets the closed forms to the same few ulp (RTOL); volume differences lose the same
+# digits as above (RTOL_DV).
 def test_partial_compaction_at_full_compaction_is_mcqueen():
     for alpha0 in (1.1, 1.35):
         a = porous_hugoniot_from_up(UP, alpha0)

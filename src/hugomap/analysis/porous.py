@@ -202,6 +202,31 @@ def porous_hugoniot_from_volume(
     return _state(1.0 - V / solid.V0, alpha, solid, None)
 
 
+def _solve_eta(f, eta_max: float, shape: tuple, what: str) -> np.ndarray:
+    """The root in (0, η_max) of f(η), vectorised over ``shape``, for f(0) < 0 and f → +∞ as
+    η → η_max (a pressure diverging there): the upper end approached geometrically until
+    f > 0, then bisection until the bracket is one ulp of η wide; ``what``: the ValueError's
+    text if no upper end is found."""
+    lo = np.zeros(shape)
+    hi = np.zeros(shape)
+    need = np.ones(shape, dtype=bool)
+    gap = eta_max
+    while need.any():
+        gap *= 0.5
+        if eta_max - gap == eta_max:
+            raise ValueError(what)
+        hi = np.where(need, eta_max - gap, hi)
+        need = f(hi) <= 0
+    for _ in range(2200):  # ≤ ~1100 halvings reach one ulp even for denormal-scale roots
+        mid = 0.5 * (lo + hi)
+        if np.all((mid == lo) | (mid == hi)):
+            break  # the bracket is one ulp wide
+        pos = f(mid) > 0
+        hi = np.where(pos, mid, hi)
+        lo = np.where(pos, lo, mid)
+    return 0.5 * (lo + hi)
+
+
 def porous_hugoniot_from_up(
     u_p: np.ndarray | float, alpha: float, solid: MGSolid = COPPER
 ) -> HugoniotState:
@@ -228,25 +253,8 @@ def porous_hugoniot_from_up(
         return _pressure_eta(eta, alpha, solid) * solid.V0 * (alpha - 1.0 + eta) - u * u
 
     shape = np.broadcast(u).shape
-    lo = np.zeros(shape)
-    # Upper end: approach η_max geometrically until f > 0 (f diverges there).
-    hi = np.zeros(shape)
-    need = np.ones(shape, dtype=bool)
-    gap = eta_max
-    while need.any():
-        gap *= 0.5
-        if eta_max - gap == eta_max:
-            raise ValueError(f"no porous Hugoniot state found for u_p = {u_p!r} m/s")
-        hi = np.where(need, eta_max - gap, hi)
-        need = f(hi) <= 0
-    for _ in range(2200):  # ≤ ~1100 halvings reach one ulp even for denormal-scale roots
-        mid = 0.5 * (lo + hi)
-        if np.all((mid == lo) | (mid == hi)):
-            break  # the bracket is one ulp wide
-        pos = f(mid) > 0
-        hi = np.where(pos, mid, hi)
-        lo = np.where(pos, lo, mid)
-    return _state(0.5 * (lo + hi), alpha, solid, u * np.ones(shape))
+    eta = _solve_eta(f, eta_max, shape, f"no porous Hugoniot state found for u_p = {u_p!r} m/s")
+    return _state(eta, alpha, solid, u * np.ones(shape))
 
 
 def solid_hugoniot_from_up(u_p: np.ndarray | float, solid: MGSolid = COPPER) -> HugoniotState:
@@ -314,9 +322,9 @@ def partial_compaction_from_up(
 
     τ = ``deviator`` [Pa] the slab's mean deviatoric part of P_xx = −σ_xx (0 without
     strength; a yielding matrix in uniaxial strain carries at most (2/3) Y/α). Solved for η
-    by bisection; then D = u_p V00/(V00 − V), P = ρ00 D u_p, E = ½ u_p². At alpha = 1 and
-    τ = 0 it is ``porous_hugoniot_from_up`` (McQueen's full compaction). The state's ``eta``
-    is the matrix's compression. u_p must be strong enough that the pores' closing alone
+    as ``porous_hugoniot_from_up`` is (``_solve_eta``); then D = u_p V00/(V00 − V), P = ρ00 D u_p, E = ½ u_p². At alpha = 1 and
+    τ = 0 it is ``porous_hugoniot_from_up`` (McQueen's full compaction). The state's
+    ``eta`` is the matrix's compression. u_p must be strong enough that the pores' closing alone
     takes more than u_p² of work per unit (V00 − V): else ValueError."""
     alpha0, alpha = _check_alpha(alpha0), _check_alpha(alpha)
     if alpha >= alpha0:
@@ -328,24 +336,18 @@ def partial_compaction_from_up(
     E = 0.5 * u * u
 
     def f(eta: np.ndarray) -> np.ndarray:
-        P_H = compression_state(eta, solid.rho0, solid.c0, solid.s)[0]
-        Ps = P_H + g * (E - 0.5 * P_H * V0 * eta)
+        P_H, E_H = compression_state(eta, solid.rho0, solid.c0, solid.s)
+        Ps = P_H + g * (E - E_H)
         return (Ps / alpha + deviator) * V0 * (alpha0 - alpha + alpha * eta) - u * u
 
     shape = np.broadcast(u).shape
-    lo, hi = np.zeros(shape), np.full(shape, 0.5 / solid.s)
-    if np.any(f(lo) >= 0):
+    if np.any(f(np.zeros(shape)) >= 0):
         raise ValueError(
             f"u_p = {u_p!r} m/s: too weak for a compaction wave to alpha = {alpha:g} with a "
             f"deviator of {deviator:.3g} Pa (the matrix would stay uncompressed)"
         )
-    while np.any(f(hi) <= 0):  # P_H diverges as η → 1/s
-        hi = np.where(f(hi) <= 0, 0.5 * (hi + 1.0 / solid.s), hi)
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        pos = f(mid) > 0
-        hi, lo = np.where(pos, mid, hi), np.where(pos, lo, mid)
-    eta = 0.5 * (lo + hi)
+    # P_H diverges as η → 1/s
+    eta = _solve_eta(f, 1.0 / solid.s, shape, f"no partial-compaction state for u_p = {u_p!r}")
     dV = V0 * (alpha0 - alpha + alpha * eta)
     V = alpha * V0 * (1.0 - eta)
     D = u * alpha0 * V0 / dV
