@@ -55,6 +55,7 @@ import numpy as np
 import xarray as xr
 
 from hugomap.keys import MIN_SLAB_BINS
+from hugomap.particles.fcc import lattice_constant
 
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
 
@@ -140,7 +141,7 @@ def sample_length(scene: dict) -> float:
     s = scene["sample"]
     if scene.get("solver") == "csph":
         return float(s["length"])
-    return s["cells"][0] * (4.0 / s["rho0"]) ** (1.0 / 3.0)
+    return s["cells"][0] * lattice_constant(s["rho0"])
 
 
 def _room_ahead(scene: dict, front_travel: float) -> float:

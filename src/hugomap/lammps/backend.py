@@ -63,6 +63,7 @@ import xarray as xr
 
 from ..analysis.linear_hugoniot import jump_state
 from ..io.dataset import UnitTable, lj_units, si_units
+from ..particles.fcc import lattice_constant
 from ..particles.pole import measure_pole, reference_pole
 from ..particles.profiles import ParticleProfile
 from ..registry import backend as backend_of
@@ -432,7 +433,7 @@ class LammpsBackend:
             sim, res, front / to_native, self._native_velocity(u_p),
             self._native_velocity(D_guess), w["length"], w["front_fraction"], w["ghost_width"],
             w["cut_every"], w["sync_steps"], crystal=not fluid,
-            lattice=(4.0 / rho_c) ** (1.0 / 3.0), kit=kit, segment=w["reservoir_segment"],
+            lattice=lattice_constant(rho_c), kit=kit, segment=w["reservoir_segment"],
         )  # fmt: skip
         res.close()
         wpole = pole if fluid else Pole.from_dict(inflow)
@@ -604,7 +605,7 @@ class LammpsBackend:
                 search = 4 * math.prod(q["cells"]) * q["run_time"] / s["dt"]
             mem = int(BASE_MB + n * BYTES_PER_ATOM / 2**20)
             return Resources(ranks * mem, (n * steps + search) * S_PER_ATOM_STEP, ranks)
-        length = s["cells"][0] * (4.0 / s["rho0"]) ** (1.0 / 3.0)
+        length = s["cells"][0] * lattice_constant(s["rho0"])
         hist = sh["max_time"] / sh["dt"] / sh["sample_every"] * (length / sh["bin_width"] + 1) * 88
         mem = int(BASE_MB + (n * BYTES_PER_ATOM + 2 * hist) / 2**20)
         return Resources(ranks * mem, n * sh["max_time"] / sh["dt"] * S_PER_ATOM_STEP, ranks)
@@ -628,7 +629,7 @@ class LammpsBackend:
         ρ0, its length in spacings ρ0^(-1/3)."""
         s = scene["sample"]
         L = float(scene.get("window", {}).get("length", math.nan))
-        a = (4.0 / float(s["rho0"])) ** (1.0 / 3.0)
+        a = lattice_constant(s["rho0"])
         spacing = float(s["rho0"]) ** (-1.0 / 3.0)
         across = float(s["rho0"]) * s["cells"][1] * s["cells"][2] * a * a * spacing
         return {"n_window": across * L / spacing, "window_spacings": L / spacing,

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..analysis.stats import block_average
+from ..particles.fcc import lattice_constant
 from .lattice import pressure_units
 from .shockframe import FrameBox
 from .units import unit_system
@@ -60,7 +61,7 @@ def search_lattice(scene: dict) -> dict[str, Any]:
     p_mean, p_err = block_average(p_i, N_BLOCKS)
     out = {
         "lattice_constant": a, "lattice_constant_err": a_err, "number_density": 4.0 / a**3,
-        "nominal_lattice_constant": (4.0 / float(s["rho0"])) ** (1.0 / 3.0),
+        "nominal_lattice_constant": lattice_constant(s["rho0"]),
         "pressure": p, "pressure_unit": unit, "pressure_measured": p_mean,
         "pressure_measured_err": p_err, "T0": T0,
         "temperature_measured": float(np.mean(series["temp"])), "cells": list(cells),

@@ -21,6 +21,7 @@ import math
 from pathlib import Path
 
 from ..keys import duplicate_point_tags, window_ahead_room
+from ..particles.fcc import lattice_constant
 
 #: Pair styles this backend runs, with the unit system each needs, and the position of the
 #: potential file among ``pair_coeff``'s arguments (None: no file).
@@ -194,11 +195,6 @@ def resolve_defaults(scene: dict) -> None:
         search.setdefault("cells", list(LATTICE_CELLS))
         search.setdefault("run_time", d["run_time"])
         search.setdefault("pdamp", d["pdamp"])
-
-
-def lattice_constant(rho: float) -> float:
-    """FCC lattice constant a = (4/ρ)^(1/3) at number density ρ."""
-    return (4.0 / rho) ** (1.0 / 3.0)
 
 
 def _check_model(base: str, model: dict) -> list[str]:

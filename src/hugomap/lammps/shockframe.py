@@ -65,6 +65,7 @@ from ..analysis.linear_hugoniot import shock_velocity
 from ..analysis.shock import jump_residual_errors, jump_residuals
 from ..analysis.stats import block_average
 from ..failures import SolverUnstable, StageFailed
+from ..particles.fcc import lattice_constant
 from ..states import Pole
 from .units import BAR_PA, UnitSystem, number_density_factor, specific_energy_factor, unit_system
 
@@ -415,7 +416,7 @@ def check_box_pole(scene: dict, pole: Pole, rho_lattice: float) -> None:
     problem = pole_pressure_problem(pole.P0, pole.P0_err, pole.Pyy0, scene,
                                     "the shock-frame box's pole")  # fmt: skip
     if problem:
-        a = (4.0 / rho_lattice) ** (1.0 / 3.0)
+        a = lattice_constant(rho_lattice)
         raise StageFailed(STATUS, (
             f"{problem}; the periodic box was built at the sample's lattice constant {a:.6g} "
             "(the lattice search's, read from the sample). Lengthen "

@@ -22,6 +22,7 @@ import numpy as np
 import xarray as xr
 
 from ..io.dataset import lj_units
+from ..particles.fcc import lattice_constant
 from ..particles.pole import measure_pole, reference_pole
 from ..particles.profiles import ParticleProfile
 from ..states import ControlParams, PistonFrame, Pole, Resources, WindowStart
@@ -259,7 +260,7 @@ class MDBackend:
         win = MDWindow.from_piston(
             solver, res, front, u_p, D_guess, w["length"], w["front_fraction"],
             w["ghost_width"], w["cut_every"], w["sync_steps"],
-            crystal=not fluid, lattice=(4.0 / s["rho0"]) ** (1.0 / 3.0),
+            crystal=not fluid, lattice=lattice_constant(s["rho0"]),
             segment=w["reservoir_segment"], inflow=w["inflow"], seam_work=w["seam_work"],
         )  # fmt: skip
         wpole = pole if fluid else Pole.from_dict(inflow)
@@ -364,7 +365,7 @@ class MDBackend:
     def _profile_bytes(self, scene: dict) -> float:
         """Profile history of one shock stage: samples x bins x 11 sums (float64)."""
         s, sh = scene["sample"], scene["shock"]
-        length = s["cells"][0] * (4.0 / s["rho0"]) ** (1.0 / 3.0)
+        length = s["cells"][0] * lattice_constant(s["rho0"])
         n_samples = sh["max_time"] / sh["dt"] / sh["sample_every"]
         return n_samples * (length / sh["bin_width"] + 1) * 11 * 8
 
@@ -410,7 +411,7 @@ class MDBackend:
         """Particles in the window at ρ0 (ρ0 A L), its length in spacings ρ0^(-1/3)."""
         w, s = scene.get("window", {}), scene["sample"]
         L = float(w.get("length", math.nan))
-        a = (4.0 / float(s["rho0"])) ** (1.0 / 3.0)  # FCC lattice constant
+        a = lattice_constant(s["rho0"])
         spacing = float(s["rho0"]) ** (-1.0 / 3.0)
         across = float(s["rho0"]) * s["cells"][1] * s["cells"][2] * a * a * spacing
         return {"n_window": across * L / spacing, "window_spacings": L / spacing,

@@ -13,6 +13,7 @@ point files and the aggregate (``io.dataset.with_si``; docs/datasets.md).
 from __future__ import annotations
 
 from ..keys import MIN_SLAB_BINS, duplicate_point_tags, window_ahead_room
+from ..particles.fcc import lattice_constant
 
 #: Relative tolerance of a data file's L_x against cells·a [-]: a prepared liquid sample is
 #: shorter by the walls' excess layer 2Γ/ρ0 (0.2 % of the default liquid, 0.6 % of a
@@ -28,11 +29,6 @@ PISTON_GAP = 30.0
 
 #: Shock methods that run in the moving window (cut out of the loading checkpoint).
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
-
-
-def lattice_constant(rho: float) -> float:
-    """FCC lattice constant a = (4/ρ)^(1/3) [σ] at number density ρ [σ⁻³]."""
-    return (4.0 / rho) ** (1.0 / 3.0)
 
 
 def box_lengths(smp: dict) -> list[float]:

@@ -15,10 +15,15 @@ import numpy as np
 _BASIS = np.array([[0.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.5], [0.0, 0.5, 0.5]])
 
 
+def lattice_constant(rho: float) -> float:
+    """a = (4/ρ)^(1/3): the FCC cell of four atoms at number density ``rho`` [length⁻³]."""
+    return (4.0 / float(rho)) ** (1.0 / 3.0)
+
+
 def fcc_positions(cells: tuple[int, int, int], rho: float) -> tuple[np.ndarray, np.ndarray]:
     """Positions (4·nx·ny·nz, 3) [σ] of an FCC lattice at number density ``rho`` [σ⁻³] and
     the box (3,) [σ] (module docstring)."""
-    a = (4.0 / rho) ** (1.0 / 3.0)
+    a = lattice_constant(rho)
     nx, ny, nz = cells
     grid = np.stack(np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij"), -1)
     pos = (grid.reshape(-1, 1, 3) + _BASIS[None, :, :]).reshape(-1, 3) + 0.25

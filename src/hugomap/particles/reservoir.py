@@ -14,6 +14,7 @@ import numpy as np
 
 from ..analysis.stats import block_average
 from ..failures import WindowError
+from .fcc import lattice_constant
 from .kit import ParticleKit, ParticleSim
 from .window import ParticleWindow
 
@@ -61,7 +62,7 @@ def make_reservoir(
     of the model) builds the boxes, so the same choice runs on any particle backend, in its
     own units: ρ0 [length⁻³], T0 its temperature
     (k_B T0 = ``kit.kT(T0)`` [energy]), E0 [energy per atom], P [energy/length³]."""
-    a = (4.0 / rho0) ** (1.0 / 3.0)
+    a = lattice_constant(rho0)
     nx = max(2, math.ceil(max(4.0 * kit.rlist(), float(min_length)) / a))
     res = kit.reservoir((nx, *cells_yz), rho0, T0, dt, seed, tau_bath)
     res.advance(max(1, int(round(equilibrate_time / dt))))
