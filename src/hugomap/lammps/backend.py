@@ -384,10 +384,11 @@ class LammpsBackend:
             sample_every=sh["sample_every"], **self._slab_lengths(sh),
         )  # fmt: skip
 
-    def _slab_lengths(self, sh: dict) -> dict[str, float]:
+    def _slab_lengths(self, sh: dict) -> dict[str, float | None]:
         """The measured slabs' gap and length when the frame's units are not the scene's
-        (units lj: none, the stage reads ``shock.gap``, ``shock.avg_length``)."""
-        return {}
+        (units lj: only ``shock.ahead_gap``, the stage reads ``shock.gap``,
+        ``shock.avg_length``)."""
+        return {"ahead_gap": sh.get("ahead_gap")}
 
     def profile(self, solver, scene: dict, info: dict | None = None):
         """The particle backends' reader (``particles.profiles.ParticleProfile``): bins from
@@ -452,9 +453,11 @@ class LammpsBackend:
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
         """The configured times (``ControlParams.from_window``) in the frame's units."""
         sh = scene["shock"]
+        ahead = sh.get("ahead_gap")
         return ControlParams.from_window(self._window_block(scene), window.geom.length,
                                          self._length(sh["gap"]),
-                                         self._length(sh["avg_length"]))  # fmt: skip
+                                         self._length(sh["avg_length"]),
+                                         ahead_gap=None if ahead is None else self._length(ahead))  # fmt: skip
 
     def _window_block(self, scene: dict) -> dict:
         """The ``window`` block in the frame's units (lj: as it is)."""
@@ -722,8 +725,9 @@ class MetalBackend(LammpsBackend):
         """The window's times [ps] in s, its slab gap [Å] in m (the other keys as they are:
         ``dichotomy.half_width`` and ``tolerance`` are in m/s already)."""
         w = dict(scene["window"])
-        for k in ("window_time", "average_time"):
-            w[k] = self._time(w[k])
+        for k in ("window_time", "average_time", "max_average_time"):
+            if w.get(k):
+                w[k] = self._time(w[k])
         d = dict(w["dichotomy"])
         for k in ("trial_time", "final_time"):
             if d.get(k):
@@ -739,8 +743,10 @@ class MetalBackend(LammpsBackend):
     def _time(self, t: float) -> float:
         return t * METAL.time_s  # ps → s
 
-    def _slab_lengths(self, sh: dict) -> dict[str, float]:
-        return {"gap": self._length(sh["gap"]), "avg_length": self._length(sh["avg_length"])}
+    def _slab_lengths(self, sh: dict) -> dict[str, float | None]:
+        ahead = sh.get("ahead_gap")
+        return {"gap": self._length(sh["gap"]), "avg_length": self._length(sh["avg_length"]),
+                "ahead_gap": None if ahead is None else self._length(ahead)}  # fmt: skip
 
     def profile(self, solver, scene: dict, info: dict | None = None) -> MetalProfile:
         """The SI reader (``MetalProfile``) at ``shock.bin_width`` [Å] (``lattice.bin_width``:

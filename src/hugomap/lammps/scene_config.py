@@ -286,9 +286,13 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             f"range (0, {Lx / 4:.4g}) (a quarter of L_x = {Lx:.4g} for {box})"
         )
     rest = Lx * (1 - sh["load_fraction"])
-    if 2 * sh["gap"] + sh["rear_margin"] >= rest:
+    ahead = sh.get("ahead_gap")
+    gaps, gaps_text = (
+        (2 * sh["gap"], "2·gap") if ahead is None else (sh["gap"] + ahead, "gap + ahead_gap")
+    )
+    if gaps + sh["rear_margin"] >= rest:
         problems.append(
-            f"{base}.shock.gap = {sh['gap']}: 2·gap + shock.rear_margin "
+            f"{base}.shock.gap = {sh['gap']}: {gaps_text} + shock.rear_margin "
             f"(= {sh['rear_margin']}) must be shorter than the part of the sample left "
             f"after loading, (1 - shock.load_fraction) L_x = {rest:.4g} with "
             f"shock.load_fraction = {sh['load_fraction']} for {box}"
