@@ -183,6 +183,33 @@ def test_bad_metal_scene_is_refused_naming_the_key(changes: dict, expected: str)
     assert expected in _problems(_scene(**changes))
 
 
+def test_relaxation_zone_keys_reach_the_frame_in_si() -> None:
+    """``shock.ahead_gap``, ``window.outflow_gap`` and ``window.max_average_time`` (the keys
+    a slab past a relaxation zone needs) reach the piston frame and the window's control in
+    m and s: 1 Å = 1e-10 m, 1 ps = 1e-12 s."""
+    from hugomap.lammps.backend import METAL_BACKEND
+
+    sc = _validated(_scene(shock__gap=20.0, shock__ahead_gap=5.0, shock__avg_length=25.0))
+    sc["window"].update(outflow_gap=8.0, average_time=3.0, max_average_time=12.0)
+    window = type("W", (), {"geom": type("G", (), {"length": 1.0e-8})()})()
+    cp = METAL_BACKEND.control_params(sc, U_P, window)
+    assert cp.gap == pytest.approx(20e-10) and cp.avg_length == pytest.approx(25e-10)
+    assert cp.ahead_gap == pytest.approx(5e-10) and cp.outflow_gap == pytest.approx(8e-10)
+    assert cp.average_time == pytest.approx(3e-12)
+    assert cp.max_average_time == pytest.approx(12e-12)
+    lengths = METAL_BACKEND._slab_lengths(sc["shock"])
+    assert lengths == pytest.approx({"gap": 20e-10, "avg_length": 25e-10, "ahead_gap": 5e-10})
+
+
+def test_ahead_gap_enters_the_room_left_after_loading() -> None:
+    """The part of the sample left after loading must hold gap + ahead_gap + rear_margin
+    (2 gap without ahead_gap): 0.7 x 144.6 Å = 101.2 Å here."""
+    assert "2·gap + shock.rear_margin" in _problems(_scene(shock__gap=45.0))
+    _validated(_scene(shock__gap=45.0, shock__ahead_gap=10.0))  # 45 + 10 + 15 < 101.2
+    msg = _problems(_scene(shock__gap=45.0, shock__ahead_gap=45.0))
+    assert "scenes.cu.shock.gap = 45.0: gap + ahead_gap + shock.rear_margin" in msg
+
+
 def test_linear_reference_is_the_lasl_fit() -> None:
     from hugomap.registry import backend
 
