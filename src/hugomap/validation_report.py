@@ -57,7 +57,9 @@ GENERATED = (
 RELAXING_CASES = {
     "lj_fcc": ("the LJ FCC crystal along [100]", "config/lj_fcc.yaml", "τ"),
     "cu_porous": ("porous copper, 2D CSPH", "config/copper_porous_sweep.yaml", "µs"),
+    "cu_eam": ("EAM copper along [100], LAMMPS", "config/lammps_cu_long.yaml", "ps"),
 }
+TIME_SCALE = {"µs": 1e6, "ps": 1e12}  # a case's SI times [s] in its unit
 # the data files the report reads (the Snakemake rule's inputs), then the figures it links
 DATA_FILES = (
     "campaign_points.csv",
@@ -97,8 +99,10 @@ RELAX_HEAD = ("scheme", "u_p", "kind", "status", "CPU s", "D", "D error", "P err
 POROUS_HEAD = ("scheme", "u_p set [m/s]", "slab u_p [m/s]", "status", "D [m/s]", "α of the slab",
                "D at that α [m/s]", "D − D(α)", "D of full compaction [m/s]", "P [GPa]",
                "P at that α [GPa]")  # fmt: skip
-RATIO_HEAD = ("window", "u_p", "piston CPU / window CPU", "window's simulated τ",
-              "crossover simulated τ")  # fmt: skip
+RATIO_HEAD = ("window", "u_p", "piston CPU / window CPU", "piston's CPU from",
+              "window's simulated time", "crossover simulated time")  # fmt: skip
+REFERENCE_HEAD = ("scheme", "u_p [m/s]", "status", "D [m/s]", "reference D [m/s]", "D − D_ref",
+                  "P [GPa]", "reference P [GPa]", "P − P_ref")  # fmt: skip
 
 
 # --- formatting ------------------------------------------------------------------------
@@ -722,7 +726,7 @@ def _relaxing_section(rows: list[dict], fig: dict, case: str) -> list[str]:
     Hugoniot at its slab's own distention."""
     what, config, t_unit = RELAXING_CASES[case]
     machines = sorted({r["machine"] for r in rows if r.get("machine")})
-    scale = 1e6 if t_unit == "µs" else 1.0  # simulated times as the case's unit
+    scale = TIME_SCALE.get(t_unit, 1.0)  # simulated times as the case's unit
     out = [
         f"### {what[0].upper() + what[1:]}",
         "",
@@ -752,10 +756,12 @@ def _relaxing_section(rows: list[dict], fig: dict, case: str) -> list[str]:
     ratios = [r for r in rows if r.get("kind") == "ratio"]
     if ratios:
         rrows = [[SCHEME_NAMES.get(r["scheme"], r["scheme"]), f"{r['u_p']:g}",
-                  num(r["piston_over_window_cpu"]), num(scale * r["window_sim_time"], ".1f"),
+                  num(r["piston_over_window_cpu"]), r.get("piston_basis", "extrapolated"),
+                  num(scale * r["window_sim_time"], ".1f"),
                   num(scale * r["crossover_sim_time"], ".1f")] for r in ratios]  # fmt: skip
         out += [table(RATIO_HEAD, rrows), ""]
-    porous = [r for r in rows if r.get("kind") == "run" and "D_ref" in r and r["cpu_s"] >= 1.0]
+    out += _reference_table(rows)
+    porous = [r for r in rows if r.get("kind") == "run" and "alpha" in r and r["cpu_s"] >= 1.0]
     if porous:
         prows = [[SCHEME_NAMES.get(r["scheme"], r["scheme"]), f"{r['u_p']:g}",
                   pm(r["u_p_slab"], math.nan, ".1f"), f"`{r['status']}`",
@@ -776,6 +782,28 @@ def _relaxing_section(rows: list[dict], fig: dict, case: str) -> list[str]:
             "",
         ]
     return out
+
+
+def _reference_table(rows: list[dict]) -> list[str]:
+    """Each run against the same sweep's point of its ``reference_scheme`` (nphug: the same
+    potential's Hugoniot at the same pole in a periodic box) at its u_p, in SI."""
+    runs = [r for r in rows if r.get("kind") == "run" and r.get("reference_scheme")
+            and r["cpu_s"] >= 1.0 and np.isfinite(r.get("D", math.nan))]  # fmt: skip
+    if not runs:
+        return []
+    trows = [[SCHEME_NAMES.get(r["scheme"], r["scheme"]), f"{r['u_p']:g}", f"`{r['status']}`",
+              pm(r["D"], r["D_abs_err"], ".1f"), pm(r["D_ref"], r["D_ref_err"], ".1f"),
+              pm_pct(r["D_dev"], r["D_dev_err"]), pm(1e-9 * r["P"], 1e-9 * r["P_abs_err"], ".2f"),
+              pm(1e-9 * r["P_ref"], 1e-9 * r["P_ref_err"], ".2f"),
+              pm_pct(r["P_dev"], r["P_dev_err"])] for r in runs]  # fmt: skip
+    ref = sorted({r["reference_scheme"] for r in runs})
+    return [
+        f"Each run against the same sweep's {', '.join(ref)} point at its u_p (the same "
+        "potential's Hugoniot from the same pole, in a periodic box):",
+        "",
+        table(REFERENCE_HEAD, trows),
+        "",
+    ]
 
 
 def _relaxing_sections(cases: dict[str, list[dict]], fig: dict) -> list[str]:
