@@ -110,16 +110,17 @@ def point_row(path: Path, case: str) -> dict | None:
         row["T_a"] = float(t[-1] - t[0])
         row["sim_time"] = float(t[-1] - t0)
     row["_scene"] = scene
-    row["_lattice"] = _built_lattice(path.parents[1] / "sample.nc")
+    row["_lattice"] = _built_lattice(loaded)
     return row
 
 
-def _built_lattice(sample: Path) -> float | None:
+def _built_lattice(checkpoint: Path) -> float | None:
     """The lattice constant a crystal's sample was built at where a search chose it
-    (``sample.lattice_pressure``: the sample's ``backend_info``), else None (the scene's)."""
-    if not sample.exists():
+    (``sample.lattice_pressure``: the ``backend_info`` every checkpoint carries, here the
+    point's ``loaded.nc``), else None (the scene's)."""
+    if not checkpoint.exists():
         return None
-    with xr.open_dataset(sample) as ds:
+    with xr.open_dataset(checkpoint) as ds:
         info = json.loads(ds.attrs.get("backend_info", "{}"))
     return info.get("lattice", {}).get("lattice_constant")
 
@@ -347,8 +348,8 @@ def figure(rows: list[dict], case: str, k: float, out: Path) -> Path:
                  fontsize=9)  # fmt: skip
     cross = [r for r in rows if r.get("kind") == "ratio"]
     note = "".join(f"\nu_p {r['u_p']:g}: piston {r['piston_over_window_cpu']:.1f}x the window;"
-                   f"\n   cheaper only below T = {r['crossover_sim_time']:.0f}"
-                   f" (the window's: {r['window_sim_time']:.0f})" for r in cross)  # fmt: skip
+                   f"\n   cheaper only below T = {r['crossover_sim_time']:.3g}"
+                   f" (the window's: {r['window_sim_time']:.3g})" for r in cross)  # fmt: skip
     ax.text(0.99, 0.99, note.strip(), transform=ax.transAxes, fontsize=7, ha="right",
             va="top")  # fmt: skip
     ax.text(0.01, 0.01, "squares: piston run (hollow: not ok)\ndiamonds: piston extrapolated"
