@@ -55,6 +55,7 @@ import numpy as np
 import xarray as xr
 
 from hugomap.keys import MIN_SLAB_BINS
+from hugomap.lammps.units import METAL
 from hugomap.particles.fcc import lattice_constant
 
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
@@ -69,11 +70,18 @@ def _scalar(ds: xr.Dataset, k: str) -> float:
     return float(ds[k]) if k in ds else float("nan")
 
 
-def _drive_start(loaded: Path) -> float:
-    """Simulated time at which the piston started (the loading run's first sample)."""
+def _loading(loaded: Path) -> tuple[float, float | None]:
+    """From a point's loading checkpoint: the simulated time at which the piston started
+    (its first sample) and the lattice constant a crystal's sample was built at where a
+    search chose it (``sample.lattice_pressure``: the ``backend_info`` every checkpoint
+    carries; else None, the scene's)."""
+    if not loaded.exists():
+        return float("nan"), None
     with xr.open_dataset(loaded) as ds:
         t = ds["hist_t"].values if "hist_t" in ds else np.array([np.nan])
-    return float(t[0]) if t.size else float("nan")
+        info = json.loads(ds.attrs.get("backend_info", "{}"))
+    t0 = float(t[0]) if t.size else float("nan")
+    return t0, info.get("lattice", {}).get("lattice_constant")
 
 
 def point_row(path: Path, case: str) -> dict | None:
@@ -94,35 +102,23 @@ def point_row(path: Path, case: str) -> dict | None:
             "cpu_s": _scalar(ds, "cpu_s"),
             "atom_steps": _scalar(ds, "atom_steps"),
             "D": _scalar(ds, "D"),
+            "D_err": _scalar(ds, "D_err"),
             "D_rel_err": _scalar(ds, "D_err") / abs(_scalar(ds, "D")),
             "P": _scalar(ds, "P"),
-            "D_abs_err": _scalar(ds, "D_err"),
-            "P_abs_err": _scalar(ds, "P_err"),
+            "P_err": _scalar(ds, "P_err"),
             "P_rel_err": _scalar(ds, "P_err") / abs(_scalar(ds, "P") - _scalar(ds, "P0")),
             "average_time": _scalar(ds, "average_time"),
         }
         if scene.get("solver") == "csph" and "alpha" in ds:
             row.update(_compaction_reference(ds, scene))
-    loaded = path.with_name("loaded.nc")
-    t0 = _drive_start(loaded) if loaded.exists() else float("nan")
+    t0, lattice = _loading(path.with_name("loaded.nc"))
     if t.size:
         row["T_s"] = float(t[0] - t0)  # from the piston's start to the steady average
         row["T_a"] = float(t[-1] - t[0])
         row["sim_time"] = float(t[-1] - t0)
     row["_scene"] = scene
-    row["_lattice"] = _built_lattice(loaded)
+    row["_lattice"] = lattice
     return row
-
-
-def _built_lattice(checkpoint: Path) -> float | None:
-    """The lattice constant a crystal's sample was built at where a search chose it
-    (``sample.lattice_pressure``: the ``backend_info`` every checkpoint carries, here the
-    point's ``loaded.nc``), else None (the scene's)."""
-    if not checkpoint.exists():
-        return None
-    with xr.open_dataset(checkpoint) as ds:
-        info = json.loads(ds.attrs.get("backend_info", "{}"))
-    return info.get("lattice", {}).get("lattice_constant")
 
 
 def _compaction_reference(ds: xr.Dataset, scene: dict) -> dict:
@@ -143,7 +139,6 @@ def _compaction_reference(ds: xr.Dataset, scene: dict) -> dict:
     full = porous_hugoniot_from_up(u, alpha0, solid) if u > 0 else None
     return {
         "u_p_slab": u, "alpha": _scalar(ds, "alpha"), "alpha_err": _scalar(ds, "alpha_err"),
-        "D_err": _scalar(ds, "D_err"), "P": _scalar(ds, "P"), "P_err": _scalar(ds, "P_err"),
         "D_ref": float(ref["D_compaction_ref"]), "D_ref_err": float(ref["D_compaction_ref_err"]),
         "P_ref": float(ref["P_compaction_ref"]), "P_ref_err": float(ref["P_compaction_ref_err"]),
         "D_full_compaction": float(full.D) if full else float("nan"), "alpha0": alpha0,
@@ -154,7 +149,7 @@ def _to_frame(scene: dict) -> float:
     """The factor from a scene's lengths to its points' (LAMMPS units metal: the scene in Å,
     the points in SI, 1e-10 m/Å; otherwise 1)."""
     metal = scene.get("solver") == "lammps" and scene.get("model", {}).get("units") == "metal"
-    return 1e-10 if metal else 1.0
+    return METAL.length_m if metal else 1.0
 
 
 def sample_length(scene: dict, lattice: float | None = None) -> float:
@@ -200,13 +195,18 @@ def piston_extrapolated(win: dict, k: float, case: str) -> dict:
     }  # fmt: skip
 
 
+def _ok_pistons(rows: list[dict], u_p: float) -> list[dict]:
+    """The piston runs at ``u_p`` that are ``ok``."""
+    return [r for r in rows if r["scheme"] == "piston" and r["kind"] == "run"
+            and r["status"] == "ok" and r["u_p"] == u_p]  # fmt: skip
+
+
 def piston_run_as_good(win: dict, rows: list[dict]) -> dict | None:
     """The cheapest piston run at the window point ``win``'s u_p that is ``ok`` and states
     relative errors in D and P no larger than the window's: a piston that reached the same
     state at the same stated error, whatever the extrapolation says; None if there is none."""
-    good = [r for r in rows if r["scheme"] == "piston" and r["kind"] == "run"
-            and r["status"] == "ok" and r["u_p"] == win["u_p"]
-            and r["D_rel_err"] <= win["D_rel_err"] and r["P_rel_err"] <= win["P_rel_err"]]  # fmt: skip
+    good = [r for r in _ok_pistons(rows, win["u_p"])
+            if r["D_rel_err"] <= win["D_rel_err"] and r["P_rel_err"] <= win["P_rel_err"]]  # fmt: skip
     return min(good, key=lambda r: r["cpu_s"]) if good else None
 
 
@@ -217,9 +217,7 @@ def piston_scaled(win: dict, rows: list[dict], k: float, case: str) -> dict | No
     T_a^(-1/2)), priced as ``piston_extrapolated``; None without such a run. Where the
     front relaxes quickly (EAM copper at u_p ≥ 1.5 km/s) this, not the window's own T_s,
     is what a piston needs."""
-    runs = [r for r in rows if r["scheme"] == "piston" and r["kind"] == "run"
-            and r["status"] == "ok" and r["u_p"] == win["u_p"]
-            and np.isfinite(r.get("T_a", np.nan))]  # fmt: skip
+    runs = [r for r in _ok_pistons(rows, win["u_p"]) if np.isfinite(r.get("T_a", np.nan))]
     if not runs:
         return None
     best = None
@@ -295,7 +293,7 @@ def with_reference(rows: list[dict], roots: list[Path], scheme: str) -> None:
             value = r[q] if q in r else float("nan")
             r[f"{q}_ref"], r[f"{q}_ref_err"] = ref[q], ref[f"{q}_err"]
             r[f"{q}_dev"] = value / ref[q] - 1.0
-            mine = r.get(f"{q}_abs_err", float("nan"))
+            mine = r.get(f"{q}_err", float("nan"))
             r[f"{q}_dev_err"] = float(
                 np.hypot(mine / ref[q], value * ref[f"{q}_err"] / ref[q] ** 2)
             )

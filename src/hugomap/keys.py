@@ -103,6 +103,27 @@ def window_ahead_room(
     ]
 
 
+def room_after_loading(base: str, shock: dict, L_x: float, box: str, unit: str = "") -> list[str]:
+    """A problem if the part of a particle sample left ahead of the front after loading,
+    (1 − ``shock.load_fraction``) L_x, cannot hold the slab ahead and the end margin:
+    ``shock.gap`` + ``shock.ahead_gap`` (2 ``shock.gap`` without it) + ``shock.rear_margin``.
+    ``box``: the sample's keys, for the message; ``unit``: the lengths' unit ('' for none)."""
+    rest = L_x * (1 - shock["load_fraction"])
+    ahead = shock.get("ahead_gap")
+    gaps, text = (
+        (2 * shock["gap"], "2·gap") if ahead is None else (shock["gap"] + ahead, "gap + ahead_gap")
+    )
+    if gaps + shock["rear_margin"] < rest:
+        return []
+    at = f"{rest:.4g} {unit}".rstrip()
+    return [
+        f"{base}.shock.gap = {shock['gap']}: {text} + shock.rear_margin "
+        f"(= {shock['rear_margin']}) must be shorter than the part of the sample left "
+        f"after loading, (1 - shock.load_fraction) L_x = {at} with "
+        f"shock.load_fraction = {shock['load_fraction']} for {box}"
+    ]
+
+
 def config_hash(obj: Any) -> str:
     """SHA-256 (first 16 hex digits) of the canonical JSON of ``obj``."""
     return hashlib.sha256(json.dumps(obj, sort_keys=True).encode()).hexdigest()[:16]

@@ -792,8 +792,8 @@ def _reference_table(rows: list[dict]) -> list[str]:
     if not runs:
         return []
     trows = [[SCHEME_NAMES.get(r["scheme"], r["scheme"]), f"{r['u_p']:g}", f"`{r['status']}`",
-              pm(r["D"], r["D_abs_err"], ".1f"), pm(r["D_ref"], r["D_ref_err"], ".1f"),
-              pm_pct(r["D_dev"], r["D_dev_err"]), pm(1e-9 * r["P"], 1e-9 * r["P_abs_err"], ".2f"),
+              pm(r["D"], r["D_err"], ".1f"), pm(r["D_ref"], r["D_ref_err"], ".1f"),
+              pm_pct(r["D_dev"], r["D_dev_err"]), pm(1e-9 * r["P"], 1e-9 * r["P_err"], ".2f"),
               pm(1e-9 * r["P_ref"], 1e-9 * r["P_ref_err"], ".2f"),
               pm_pct(r["P_dev"], r["P_dev_err"])] for r in runs]  # fmt: skip
     ref = sorted({r["reference_scheme"] for r in runs})

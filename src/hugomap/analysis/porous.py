@@ -322,10 +322,11 @@ def partial_compaction_from_up(
 
     τ = ``deviator`` [Pa] the slab's mean deviatoric part of P_xx = −σ_xx (0 without
     strength; a yielding matrix in uniaxial strain carries at most (2/3) Y/α). Solved for η
-    as ``porous_hugoniot_from_up`` is (``_solve_eta``); then D = u_p V00/(V00 − V), P = ρ00 D u_p, E = ½ u_p². At alpha = 1 and
-    τ = 0 it is ``porous_hugoniot_from_up`` (McQueen's full compaction). The state's
-    ``eta`` is the matrix's compression. u_p must be strong enough that the pores' closing alone
-    takes more than u_p² of work per unit (V00 − V): else ValueError."""
+    as ``porous_hugoniot_from_up`` is (``_solve_eta``); then D = u_p V00/(V00 − V),
+    P = ρ00 D u_p, E = ½ u_p². At alpha = 1 and τ = 0 it is ``porous_hugoniot_from_up``
+    (McQueen's full compaction). The state's ``eta`` is the matrix's compression. u_p must
+    be strong enough that the pores' closing alone takes more than u_p² of work per unit
+    (V00 − V): else ValueError."""
     alpha0, alpha = _check_alpha(alpha0), _check_alpha(alpha)
     if alpha >= alpha0:
         raise ValueError(f"alpha = {alpha:g} must be below the initial distention {alpha0:g}")

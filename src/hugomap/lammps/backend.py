@@ -385,10 +385,11 @@ class LammpsBackend:
         )  # fmt: skip
 
     def _slab_lengths(self, sh: dict) -> dict[str, float | None]:
-        """The measured slabs' gap and length when the frame's units are not the scene's
-        (units lj: only ``shock.ahead_gap``, the stage reads ``shock.gap``,
-        ``shock.avg_length``)."""
-        return {"ahead_gap": sh.get("ahead_gap")}
+        """The measured slabs' ``shock.gap``, ``shock.avg_length`` and ``shock.ahead_gap``
+        (None: ``gap``) in the frame's units (``_length``)."""
+        ahead = sh.get("ahead_gap")
+        return {"gap": self._length(sh["gap"]), "avg_length": self._length(sh["avg_length"]),
+                "ahead_gap": None if ahead is None else self._length(ahead)}  # fmt: skip
 
     def profile(self, solver, scene: dict, info: dict | None = None):
         """The particle backends' reader (``particles.profiles.ParticleProfile``): bins from
@@ -452,12 +453,10 @@ class LammpsBackend:
 
     def control_params(self, scene: dict, u_p: float, window) -> ControlParams:
         """The configured times (``ControlParams.from_window``) in the frame's units."""
-        sh = scene["shock"]
-        ahead = sh.get("ahead_gap")
+        slab = self._slab_lengths(scene["shock"])
         return ControlParams.from_window(self._window_block(scene), window.geom.length,
-                                         self._length(sh["gap"]),
-                                         self._length(sh["avg_length"]),
-                                         ahead_gap=None if ahead is None else self._length(ahead))  # fmt: skip
+                                         slab["gap"], slab["avg_length"],
+                                         ahead_gap=slab["ahead_gap"])  # fmt: skip
 
     def _window_block(self, scene: dict) -> dict:
         """The ``window`` block in the frame's units (lj: as it is)."""
@@ -742,11 +741,6 @@ class MetalBackend(LammpsBackend):
 
     def _time(self, t: float) -> float:
         return t * METAL.time_s  # ps → s
-
-    def _slab_lengths(self, sh: dict) -> dict[str, float | None]:
-        ahead = sh.get("ahead_gap")
-        return {"gap": self._length(sh["gap"]), "avg_length": self._length(sh["avg_length"]),
-                "ahead_gap": None if ahead is None else self._length(ahead)}  # fmt: skip
 
     def profile(self, solver, scene: dict, info: dict | None = None) -> MetalProfile:
         """The SI reader (``MetalProfile``) at ``shock.bin_width`` [Å] (``lattice.bin_width``:

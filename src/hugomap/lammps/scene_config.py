@@ -20,7 +20,7 @@ import importlib.util
 import math
 from pathlib import Path
 
-from ..keys import duplicate_point_tags, window_ahead_room
+from ..keys import duplicate_point_tags, room_after_loading, window_ahead_room
 from ..particles.fcc import lattice_constant
 
 #: Pair styles this backend runs, with the unit system each needs, and the position of the
@@ -285,18 +285,7 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             f"{base}.shock.bin_width = {sh['bin_width']}: wider than the box allows; allowed "
             f"range (0, {Lx / 4:.4g}) (a quarter of L_x = {Lx:.4g} for {box})"
         )
-    rest = Lx * (1 - sh["load_fraction"])
-    ahead = sh.get("ahead_gap")
-    gaps, gaps_text = (
-        (2 * sh["gap"], "2·gap") if ahead is None else (sh["gap"] + ahead, "gap + ahead_gap")
-    )
-    if gaps + sh["rear_margin"] >= rest:
-        problems.append(
-            f"{base}.shock.gap = {sh['gap']}: {gaps_text} + shock.rear_margin "
-            f"(= {sh['rear_margin']}) must be shorter than the part of the sample left "
-            f"after loading, (1 - shock.load_fraction) L_x = {rest:.4g} with "
-            f"shock.load_fraction = {sh['load_fraction']} for {box}"
-        )
+    problems += room_after_loading(base, sh, Lx, box)
     problems += _check_reference(base, scene)
     problems += _check_lattice(base, scene)
     problems += duplicate_point_tags(base, sh["u_p"])

@@ -12,7 +12,7 @@ point files and the aggregate (``io.dataset.with_si``; docs/datasets.md).
 
 from __future__ import annotations
 
-from ..keys import MIN_SLAB_BINS, duplicate_point_tags, window_ahead_room
+from ..keys import MIN_SLAB_BINS, duplicate_point_tags, room_after_loading, window_ahead_room
 from ..particles.fcc import lattice_constant
 
 #: Relative tolerance of a data file's L_x against cells·a [-]: a prepared liquid sample is
@@ -79,18 +79,7 @@ def check(base: str, scene: dict, cfg: dict) -> list[str]:
             f"allowed range (0, {L[0] / 4:.4g}) sigma (a quarter of L_x = {L[0]:.4g} "
             f"for {box})"
         )
-    rest = L[0] * (1 - sh["load_fraction"])
-    ahead = sh.get("ahead_gap")
-    gaps, gaps_text = (
-        (2 * sh["gap"], "2·gap") if ahead is None else (sh["gap"] + ahead, "gap + ahead_gap")
-    )
-    if gaps + sh["rear_margin"] >= rest:
-        problems.append(
-            f"{base}.shock.gap = {sh['gap']}: {gaps_text} + shock.rear_margin "
-            f"(= {sh['rear_margin']}) must be shorter than the part of the sample left "
-            f"after loading, (1 - shock.load_fraction) L_x = {rest:.4g} sigma with "
-            f"shock.load_fraction = {sh['load_fraction']} for {box}"
-        )
+    problems += room_after_loading(base, sh, L[0], box, "sigma")
     # Up to shock.gap is always allowed: the slab as it was before the piston had a gap of
     # its own (on a short sample the drive's first samples may have none; the measurement
     # needs half of them with one).
