@@ -518,6 +518,42 @@ def test_two_waves_are_measured_as_two_waves():
     assert abs(r["residual_momentum"]) < 0.01 and abs(r["residual_energy"]) < 0.01
 
 
+def test_a_weak_precursor_is_read_as_a_first_wave():
+    """A precursor at D_el = 5 carrying u 0.012 (P 2 % of the main jump, under
+    ``TWO_WAVE_FRACTION``) fills everything ahead of a plastic wave at D = 3, u_p = 1 taken
+    exactly from it (as in a window the precursor has left through its inflow). Read from the
+    pole the state ahead is 1.2 % of u_p off it, so the point could not be ok; it is denser
+    and moving in the sense of u_p beyond its noise (``weak_precursor``), so the jump is taken
+    from it and closes. The same u and P ahead at the pole's density (no compression: a
+    disturbed inflow) stay off the pole, not ok."""
+    from hugomap.analysis.shock import TWO_WAVE_FRACTION, measure_point
+    from hugomap.states import Pole
+
+    rng = np.random.default_rng(7)
+    u_el, D, u_p = 0.012, 3.0, 1.0
+    pre = _behind(1.0, 1.0, 0.0, 0.0, 5.0, u_el)
+    pla = _behind(*pre, u_el, D, u_p)
+    t = np.linspace(0.5, 20.0, 200)
+    xf = 10.0 + D * t
+    x = np.arange(1, 101)[None, :]
+    pole = Pole(rho0=1.0, P0=1.0, E0=0.0, T0=1.0, Pyy0=1.0, rho0_err=0.0, P0_err=0.0,
+                E0_err=0.0, T0_err=0.0, Pyy0_err=0.0)  # fmt: skip
+    for rho_ahead, status in ((pre[0], "ok"), (1.0, "not_converged")):
+        levels = np.array([[30.0, u_p, *pla], [30.0, u_el, rho_ahead, pre[1], pre[2]]])
+        sums = levels[(x > xf[:, None]).astype(int)].copy()
+        sums[..., 2:] *= 1 + 0.0005 * rng.standard_normal(sums[..., 2:].shape)
+        sums[..., 1] += 0.0005 * rng.standard_normal(sums[..., 1].shape)
+        h = {"t": t, "front": xf, "x_left": np.zeros(t.size), "x_right": np.full(t.size, 100.0),
+             "sums": sums}  # fmt: skip
+        r = measure_point(h, _ToyProfile(), pole, u_p, 0.0, gap=3.0, avg_length=20.0,
+                          residual_tol=0.01)  # fmt: skip
+        assert r["ahead_P"] - 1.0 < TWO_WAVE_FRACTION * (r["P"] - 1.0)
+        assert r["status"] == status, r["diagnostic"]
+        assert r["two_wave"] == float(status == "ok")
+        assert ("state ahead off the pole" in r["diagnostic"]) == (status != "ok")
+        assert r["ahead_u"] == pytest.approx(u_el, rel=0.05)  # the precursor's plateau
+
+
 def test_a_point_whose_state_ahead_is_off_the_pole_is_not_ok():
     """The state behind the exact jump from the pole (its residuals from the pole ~0), the
     material ahead moving at δu: at δu = 0.02 (2 % of u_p = 1, far beyond its noise) the

@@ -217,3 +217,44 @@ def test_blowup_diagnostics():
     with pytest.raises(SPHUnstable) as err:
         sim.advance(60)
     assert err.value.status == "dt_collapse"
+
+
+@pytest.mark.parametrize(
+    "m",
+    [
+        [[0.96, 0.0], [0.0, 0.96]],  # the bulk of a square lattice: M⁻¹ itself
+        [[0.7, 0.2], [0.2, 0.5]],  # a pore's surface, both eigenvalues above the floor
+        [[0.65, 0.02], [0.02, 0.0026]],  # a one-particle chain: one eigenvalue 0.002
+        [[0.3, 0.3], [0.3, 0.3]],  # rank one, off the axes
+        [[0.05, 0.0], [0.0, 0.01]],  # almost no neighbours: B = I
+    ],
+)
+def test_floored_inverse_bounds_the_gradient_correction(m):
+    """B = Q diag(1/max(λ, floor)) Qᵀ against numpy's eigendecomposition: M⁻¹ exactly where
+    M is well conditioned, never more than 1/floor where it is not (``csph.floored_inverse``)."""
+    m = np.asarray(m)
+    bxx, bxy, byy = csph.floored_inverse(m[0, 0], m[0, 1], m[1, 1])
+    b = np.array([[bxx, bxy], [bxy, byy]])
+    lam, q = np.linalg.eigh(m)
+    if lam.max() < csph.EIG_FLOOR:
+        ref = np.eye(2)
+    else:
+        ref = q @ np.diag(1.0 / np.maximum(lam, csph.EIG_FLOOR)) @ q.T
+    assert np.allclose(b, ref, rtol=1e-12, atol=1e-12)
+    assert np.max(np.abs(np.linalg.eigvalsh(b))) <= 1.0 / csph.EIG_FLOOR * (1 + 1e-12)
+    if lam.min() >= csph.EIG_FLOOR:
+        assert np.allclose(b @ m, np.eye(2), atol=1e-12)
+
+
+def test_a_one_particle_chain_keeps_a_bounded_correction():
+    """A chain of particles one wide (a ligament between two pores), zigzagging by 0.1 dx:
+    M's eigenvalue across it is about 0.005, so M⁻¹ would amplify the velocity gradient
+    across the chain 190-fold (the det M > 1e-3 guard let it); every B stays ≤ 1/floor."""
+    x = np.column_stack([5e-5 + 0.1 * DX * (np.arange(9) % 2), (np.arange(9) + 0.5) * DX])
+    sim = CSPHSimulation(_state(x, np.zeros_like(x)), copper(), copper_strength())
+    sim.compute_rates()
+    pk = sim._pk
+    for i in range(len(x)):
+        b = np.array([[pk[i, csph.PBXX], pk[i, csph.PBXY]], [pk[i, csph.PBXY], pk[i, csph.PBYY]]])
+        assert np.all(np.isfinite(b))
+        assert np.max(np.abs(np.linalg.eigvalsh(b))) <= 1.0 / csph.EIG_FLOOR * (1 + 1e-12)

@@ -156,8 +156,8 @@ def named_causes(
         frac, key, d = off
         out.append(
             f"state ahead off the pole: its {key} differs by {d:+.3g} ({frac:.2%} of the "
-            f"jump, beyond {CLOSE_SIGMAS:g} errors) while the jump is taken from the pole (a "
-            "precursor below the two-wave threshold, or material the inflow or the far end "
-            "disturbed)"
+            f"jump, beyond {CLOSE_SIGMAS:g} errors) while the jump is taken from the pole "
+            "(material the inflow or the far end disturbed; a compression wave ahead, denser "
+            "and set moving in the sense of u_p, is read as a first wave)"
         )
     return out
