@@ -24,40 +24,39 @@ def _numba_cache_dir() -> str:
     return str(base / "hugomap" / f"numba-{h.hexdigest()[:16]}-t{threads}")
 
 
-def _claim_slot(folder: str) -> str:
-    """The first of ``folder``-s0, -s1, … whose lock no other live process holds, locked
-    for this process's life (the lock goes with the process, however it ends). numba's
-    cache is not safe for two writers: two processes compiling different signatures of one
-    kernel into a fresh folder each numbered its entry 0, the last index won, and a later
-    load ran the other's code (a segfault in the neighbour-list build under pytest-xdist).
-    One writer per folder; a process finds a warm folder whenever one is free."""
+def _lock_cache_saves() -> None:
+    """Serialise numba's cache writes across processes: each save (read the index, pick a
+    file number for a new signature, write index and data) runs under an flock on the
+    folder's ``.lock``. Two processes saving new signatures of one kernel at once both
+    read the same index, pick the same number, and the last index and the last data file
+    need not be the same process's, so a later load runs one signature's code for the
+    other's (numba 0.68's ``IndexDataCacheFile.save``). Loads stay unlocked: numba
+    replaces each file atomically. A numba without that class keeps its own behaviour."""
     try:
         import fcntl
-    except ImportError:  # no POSIX locks: one folder, as before
-        return folder
-    for k in range(64):
-        slot = f"{folder}-s{k}"
-        os.makedirs(slot, exist_ok=True)
-        fd = os.open(os.path.join(slot, ".lock"), os.O_CREAT | os.O_RDWR, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            os.close(fd)
-            continue
-        _SLOT_LOCKS.append(fd)
-        return slot
-    return f"{folder}-p{os.getpid()}"
 
+        from numba.core.caching import IndexDataCacheFile
+    except ImportError:  # no POSIX locks, or numba's cache moved: as numba does it
+        return
+    save = IndexDataCacheFile.save
+    if getattr(save, "_hugomap_locked", False):
+        return
 
-_SLOT_LOCKS: list[int] = []
-# Set by hugomap when it chose the folder: a child process (a Snakemake job a test started,
-# an MPI rank) inherits NUMBA_CACHE_DIR from it and must claim its own slot.
-_OURS = "HUGOMAP_NUMBA_CACHE_DIR"
+    def locked_save(self, key, data):
+        os.makedirs(self._cache_path, exist_ok=True)
+        with open(os.path.join(self._cache_path, ".lock"), "a") as fh:
+            fcntl.flock(fh, fcntl.LOCK_EX)
+            save(self, key, data)
+
+    locked_save._hugomap_locked = True
+    IndexDataCacheFile.save = locked_save
+
 
 # A user's own NUMBA_CACHE_DIR wins. numba reads the variable when it is first imported; if
 # it was imported before hugomap, its config is set too (it is read when a kernel is
 # decorated), or the kernels would load stale caches from __pycache__ (seen: a segfault).
-if "NUMBA_CACHE_DIR" not in os.environ or os.environ["NUMBA_CACHE_DIR"] == os.environ.get(_OURS):
-    os.environ["NUMBA_CACHE_DIR"] = os.environ[_OURS] = _claim_slot(_numba_cache_dir())
+if "NUMBA_CACHE_DIR" not in os.environ:
+    os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
     if "numba" in sys.modules:
         sys.modules["numba"].config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+_lock_cache_saves()

@@ -1,57 +1,68 @@
-"""The numba cache folder: one writer at a time (``hugomap._claim_slot``).
+"""The numba cache: writes serialised across processes (``hugomap._lock_cache_saves``).
 
-numba's on-disk cache is not safe for two processes compiling into one fresh folder (their
-entries share file numbers; a later load ran the other's code and segfaulted), so each live
-process holds a lock on its own slot folder; these tests check that two processes at once,
-and a child that inherited its parent's folder, get different slots, and that a slot is
-reused once its holder has gone."""
+numba's ``IndexDataCacheFile.save`` reads the index, picks a file number for a new
+signature and writes index and data; two processes doing that at once into one folder can
+leave an index whose entry points at the other's code. hugomap runs each save under an
+flock on the folder's ``.lock``: this test holds that lock and checks that a process
+compiling a cached kernel into the folder waits for it, then saves a cache that loads."""
 
 from __future__ import annotations
 
+import fcntl
 import os
 import subprocess
 import sys
+import time
 
-import hugomap
+import hugomap  # noqa: F401  (wraps numba's cache saves)
 
-CHILD = "import os, hugomap; print(os.environ['NUMBA_CACHE_DIR'])"
+KERNEL = """
+import sys
+sys.path.insert(0, sys.argv[1])
+import hugomap, numba, kern
+print(kern.twice(21), sum(kern.twice.stats.cache_hits.values()), flush=True)
+"""
+SOURCE = """
+from hugomap.numba_conf import njit
 
-
-def _child_dir(env: dict[str, str]) -> str:
-    out = subprocess.run([sys.executable, "-c", CHILD], env=env, capture_output=True, text=True,
-                         check=True)  # fmt: skip
-    return out.stdout.strip()
-
-
-def test_a_process_beside_a_live_holder_gets_another_slot(tmp_path):
-    base = str(tmp_path / "numba-x-t1")
-    mine = hugomap._claim_slot(base)
-    assert mine == base + "-s0"
-    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", hugomap._OURS)}
-    env["XDG_CACHE_HOME"] = str(tmp_path)
-    first = _child_dir(env)
-    # the child's folder is keyed on the sources and threads, under the same cache root
-    assert first.startswith(str(tmp_path / "hugomap" / "numba-")) and first.endswith("-s0")
-    # the child has exited, so its slot is free again; held here, a child that inherited
-    # this folder (hugomap set it) claims the next one
-    held = hugomap._claim_slot(first[: -len("-s0")])
-    assert held == first
-    env.update(NUMBA_CACHE_DIR=held, **{hugomap._OURS: held})
-    assert _child_dir(env) == first[: -len("-s0")] + "-s1"
-    # a user's own folder wins
-    env.update(NUMBA_CACHE_DIR=str(tmp_path / "mine"))
-    assert _child_dir(env) == str(tmp_path / "mine")
+@njit
+def twice(x):
+    return 2 * x
+"""
 
 
-def test_two_live_processes_never_share_a_slot(tmp_path):
-    base = str(tmp_path / "numba-y-t1")
-    code = (
-        "import sys, time, hugomap; print(hugomap._claim_slot(sys.argv[1]), flush=True); "
-        "time.sleep(3)"
-    )
-    procs = [subprocess.Popen([sys.executable, "-c", code, base], stdout=subprocess.PIPE,
-                              text=True) for _ in range(3)]  # fmt: skip
-    slots = [p.stdout.readline().strip() for p in procs]
-    for p in procs:
-        p.wait(timeout=60)
-    assert sorted(slots) == [base + f"-s{k}" for k in range(3)]
+def _run(code_dir, env):
+    return subprocess.Popen([sys.executable, "-c", KERNEL, str(code_dir)], env=env,
+                            stdout=subprocess.PIPE, text=True)  # fmt: skip
+
+
+def test_a_cache_save_waits_for_the_folder_lock(tmp_path):
+    from numba.core.caching import IndexDataCacheFile
+
+    assert getattr(IndexDataCacheFile.save, "_hugomap_locked", False)
+    code = tmp_path / "code"
+    code.mkdir()
+    (code / "kern.py").write_text(SOURCE)
+    cache = tmp_path / "cache"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    env.pop("NUMBA_DISABLE_JIT", None)
+    # the kernel's folder under the cache root, as numba names it: created by a first run
+    first = _run(code, env)
+    out, _ = first.communicate(timeout=120)
+    assert out.split() == ["42", "0"], out
+    (folder,) = {p.parent for p in cache.rglob("*.nbi")}
+    for p in folder.glob("kern.*"):
+        p.unlink()  # the next run compiles and saves again
+    with open(folder / ".lock", "a") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        proc = _run(code, env)
+        time.sleep(8.0)  # far longer than compiling one small kernel takes
+        assert proc.poll() is None, "the save did not wait for the lock"
+        assert not list(folder.glob("kern.*.nbc"))
+    out, _ = proc.communicate(timeout=120)
+    assert proc.returncode == 0 and out.split()[0] == "42"
+    assert list(folder.glob("kern.*.nbc"))
+    # and what it saved loads: a third process hits the cache
+    third = _run(code, env)
+    out, _ = third.communicate(timeout=120)
+    assert out.split() == ["42", "1"], out

@@ -136,15 +136,14 @@ def rebuild(
     use_half: bool,
     half: np.ndarray,
     nhalf: np.ndarray,
-    sort: bool,
     rowless: int,
 ) -> int:
-    """Sort atoms by cell (if ``sort``), build the list, remember x_ref; return the row need.
-    ``rowless``: frozen atoms with ids −1 … −rowless keep no row (``drop_rows``)."""
-    if sort:
-        start = sort_by_cell(x, v, f, ids, L, nc)
-    else:
-        start = counting_sort(cell_of(x, L, nc), nc[0] * nc[1] * nc[2])[1]
+    """Sort atoms by cell, build the list, remember x_ref; return the row need.
+    ``rowless``: frozen atoms with ids −1 … −rowless keep no row (``drop_rows``). (No
+    literal flag among the arguments: called with a constant True from jitted code and
+    with a bool from Python, numba compiled and cached two overloads, and a process that
+    loaded the second from the cache called a null pointer.)"""
+    start = sort_by_cell(x, v, f, ids, L, nc)
     need = build_full_list(x, L, periodic, nc, start, rlist2, nbr, nnb)
     if need <= nbr.shape[1]:
         if use_half:
@@ -264,7 +263,7 @@ def run_steps(
             return s, LOST
         if max_d2 > half_skin2:
             need = rebuild(
-                x, v, f, ids, x_ref, L, periodic, nc, rlist2, nbr, nnb, use_half, half, nhalf, True,
+                x, v, f, ids, x_ref, L, periodic, nc, rlist2, nbr, nnb, use_half, half, nhalf,
                 rowless,
             )  # fmt: skip
             counters[0] += 1

@@ -95,7 +95,7 @@ class MDSimulation:
             if sort:
                 need = ig.rebuild(
                     s.x, s.v, s.f, s.ids, s.x_ref, s.L, s.periodic, self.nc,
-                    self.lj.rlist**2, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, True,
+                    self.lj.rlist**2, self.nbr, self.nnb, self.use_half, self.half, self.nhalf,
                     self.rowless,
                 )  # fmt: skip
                 sort = False
