@@ -659,3 +659,28 @@ def test_slab_series_is_the_series_the_point_averages():
     assert np.nanmean(u) == pytest.approx(r["u_p_measured"], rel=1e-12)
     assert np.nanmean(P) == pytest.approx(r["P"], rel=1e-12)
     assert np.nanstd(u) > 0  # the samples, not a constant
+
+
+def test_a_front_that_has_not_yielded_is_named_elastic():
+    """EAM copper along [100] at 500 m/s (the piston's slab: P_xx 21.6 GPa above P0, 2.23 GPa
+    of shear, 10 % of the jump, errors 0.33 GPa in P_xx and 0.08 in P_yy, P_zz): flagged
+    ``elastic_front`` and named; at 1500 m/s the window's 0.68 ± 0.20 GPa of shear on an
+    80-GPa jump (0.85 %) is not, nor is 10 % of the jump within three of its errors."""
+    from hugomap.analysis.causes import elastic_front, named_causes, shear_stress
+    from hugomap.states import Pole
+
+    pole = Pole(rho0=8810.8, P0=0.02e9, E0=0.0)
+    P = 21.655e9
+    Pyy = Pzz = P - 2 * 2.23e9
+    v = {"P": P, "P_err": 0.334e9, "Pyy": Pyy, "Pyy_err": 0.084e9, "Pzz": Pzz,
+         "Pzz_err": 0.084e9, **AHEAD}  # fmt: skip
+    v["shear_stress"], v["shear_stress_err"] = shear_stress(v)
+    assert v["shear_stress"] == pytest.approx(2.23e9)
+    assert v["shear_stress_err"] == pytest.approx(0.5 * np.sqrt(0.334**2 + 0.5 * 0.084**2) * 1e9)
+    assert elastic_front(v, pole)
+    causes = named_causes({**v, "rho": 9000.0, "E": 1e4}, 0.01, None, pole)
+    assert any(c.startswith("front not yielded") and "10.3%" in c for c in causes), causes
+    window = {**v, "P": 80.66e9, "shear_stress": 0.678e9, "shear_stress_err": 0.20e9}
+    assert not elastic_front(window, pole)
+    noisy = {**v, "shear_stress_err": 1.0e9}
+    assert not elastic_front(noisy, pole)

@@ -19,6 +19,11 @@ CLOSE_SIGMAS = 3.0  # an ok point's jump residuals are within this many of their
 # uniform to 1e-7, so a 3-error test alone would call that point a bias); an exact model's
 # residuals are rounding (1e-13)
 RESIDUAL_FLOOR = 1e-4
+# a slab whose shear stress exceeds this fraction of P − P0 (and CLOSE_SIGMAS errors) is
+# behind a front that has not yielded: a plastic state holds at most Y/2 (copper at 100 m/s:
+# 0.06 of 3.6 GPa, 1.7 %), a uniaxial elastic one G/(K + 4G/3) ≈ 0.2 of its P − P0 in an
+# isotropic metal, and EAM copper along [100] at 500 m/s 10 % (2.23 of 21.6 GPa)
+ELASTIC_SHEAR_FRACTION = 0.05
 
 
 CLOSURES = ("mass", "momentum", "energy", "flow")  # the residuals an ok point closes
@@ -67,6 +72,31 @@ def ahead_off_pole(
         default=(0.0, "", 0.0),
     )  # fmt: skip
     return worst if worst[0] > residual_tol else None
+
+
+def shear_stress(values: dict) -> tuple[float, float]:
+    """τ = (P_xx − (P_yy + P_zz)/2)/2 of the slab behind the front and its standard error
+    from P_xx's, P_yy's and P_zz's, taken as independent (their errors are positively
+    correlated, so this overstates τ's) [stress units of the point]."""
+    P, Pyy, Pzz = (values.get(k, np.nan) for k in ("P", "Pyy", "Pzz"))
+    e = [values.get(f"{k}_err", np.nan) for k in ("P", "Pyy", "Pzz")]
+    tau = 0.5 * (P - 0.5 * (Pyy + Pzz))
+    return float(tau), float(0.5 * np.sqrt(e[0] ** 2 + 0.25 * (e[1] ** 2 + e[2] ** 2)))
+
+
+def elastic_front(values: dict, pole: Pole | None) -> bool:
+    """Whether the slab behind the front holds shear as an elastic (uniaxially strained)
+    state does: its shear stress (``shear_stress``, in the sense of the jump P − P0) above
+    ``ELASTIC_SHEAR_FRACTION`` of P − P0 and ``CLOSE_SIGMAS`` of its error. Such a front has
+    not yielded (a perfect crystal below its plastic threshold), and its state lies on the
+    uniaxial elastic branch, not on the hydrostatic Hugoniot a plastic front reaches."""
+    if pole is None:
+        return False
+    jump = values.get("P", np.nan) - pole.P0
+    tau, err = values.get("shear_stress", np.nan), values.get("shear_stress_err", np.nan)
+    lead = tau * np.sign(jump)
+    return bool(np.isfinite(lead) and lead > ELASTIC_SHEAR_FRACTION * abs(jump)
+                and lead > CLOSE_SIGMAS * err)  # fmt: skip
 
 
 def ahead_seen(values: dict) -> bool:
@@ -150,6 +180,14 @@ def named_causes(
             "shock.gap ahead of the front and shock.gap before the far boundary, so the jump "
             "starts from the pole unseen (a precursor or a disturbed inflow would go "
             "unnoticed): leave more room ahead of the front"
+        )
+    if elastic_front(values, pole):
+        jump = values["P"] - pole.P0
+        out.append(
+            f"front not yielded: the slab holds a shear stress of {values['shear_stress']:.4g}"
+            f" ± {values['shear_stress_err']:.2g}, {values['shear_stress'] / jump:.1%} of "
+            "P − P0: an elastic, uniaxially strained state (a crystal below its plastic "
+            "threshold), to be compared with the elastic branch, not the hydrostatic Hugoniot"
         )
     off = ahead_off_pole(values, residual_tol, pole)
     if off is not None:

@@ -29,8 +29,10 @@ from .causes import (
     ahead_off_pole,
     ahead_seen,
     closes,
+    elastic_front,
     named_causes,
     residual_text,
+    shear_stress,
 )
 from .stats import (
     CorrelatedSlope,
@@ -613,7 +615,8 @@ def measure_point(
     out["P_rh_err"] = float(pole.rho0 * np.hypot(abs(u_jump) * D_err, abs(D) * u_jump_err) + P0_err)
     out["E_minus_E0"] = E - pole.E0
     out["E_minus_E0_err"] = float(np.hypot(out["E_err"], pole.E0_err))
-    out["shear_stress"] = 0.5 * (P - 0.5 * (out["Pyy"] + out["Pzz"]))
+    out["shear_stress"], out["shear_stress_err"] = shear_stress({**out, "P_err": P_stat})
+    out["elastic_front"] = float(elastic_front(out, pole))
     dP_ahead = out["ahead_P"] - P0
     dP_ahead_err = float(np.hypot(out["ahead_P_err"], P0_err))
     # a precursor compresses in the main jump's sense; material ahead rarefied (a disturbed

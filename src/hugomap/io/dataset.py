@@ -75,6 +75,11 @@ POINT_VARS: dict[str, tuple[str, str]] = {
     "ahead_E": ("epsilon", "specific internal energy just ahead of the tracked front"),
     "ahead_u": ("sigma tau^-1", "particle velocity just ahead of the tracked front"),
     "two_wave": ("1", "1 when an elastic precursor runs ahead of the tracked front"),
+    "elastic_front": (
+        "1",
+        "1 when the slab behind the front holds a shear stress above 5 % of P - P0 (and 3 "
+        "errors): a front that has not yielded, on the elastic branch",
+    ),
     "relaxation_length": (
         "sigma",
         "window points: the relaxation zone, the distance behind the front over which the "

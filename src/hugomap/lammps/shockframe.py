@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.causes import CLOSE_SIGMAS, closes, residual_text
+from ..analysis.causes import CLOSE_SIGMAS, closes, elastic_front, residual_text, shear_stress
 from ..analysis.linear_hugoniot import shock_velocity
 from ..analysis.shock import jump_residual_errors, jump_residuals
 from ..analysis.stats import block_average
@@ -551,7 +551,8 @@ def shock_frame_point(
     values["P_rh"] = pole.P0 + pole.rho0 * st["D"] * st["u_p"]
     values["P_rh_err"] = float(np.hypot(pole.rho0 * st["D"] * st["u_p_err"],
                                         pole.rho0 * st["u_p"] * st["D_err"]) + pole.P0_err)  # fmt: skip
-    values["shear_stress"] = 0.5 * (st["P"] - 0.5 * (st["Pyy"] + st["Pzz"]))
+    values["shear_stress"], values["shear_stress_err"] = shear_stress(values)
+    values["elastic_front"] = float(elastic_front(values, pole))
     res, res_err = residuals(st, pole)
     values.update({f"residual_{k}": v for k, v in res.items()})
     values.update({f"residual_{k}_err": v for k, v in res_err.items()})
@@ -573,6 +574,10 @@ def shock_frame_point(
                           "shock_frame.max_iterations iterations")  # fmt: skip
         if not closing.get("momentum", True):
             causes.append("the state is off the Rayleigh line (momentum residual)")
+        if values["elastic_front"]:
+            causes.append(f"not yielded: a shear stress of {values['shear_stress']:.4g}, "
+                          f"{values['shear_stress'] / (st['P'] - pole.P0):.1%} of P − P0 (the "
+                          "elastic branch)")  # fmt: skip
         if not closing.get("energy", True):
             causes.append("the state is off the Hugoniot (energy residual)")
         if not closing.get("mass", True):
