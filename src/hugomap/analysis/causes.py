@@ -99,6 +99,17 @@ def elastic_front(values: dict, pole: Pole | None) -> bool:
                 and lead > CLOSE_SIGMAS * err)  # fmt: skip
 
 
+def elastic_text(values: dict, pole: Pole) -> str:
+    """The named cause of a point whose front has not yielded (``elastic_front``)."""
+    return (
+        f"front not yielded: the slab holds a shear stress of {values['shear_stress']:.4g}"
+        f" ± {values['shear_stress_err']:.2g}, "
+        f"{values['shear_stress'] / (values['P'] - pole.P0):.1%} of P − P0: an elastic, "
+        "uniaxially strained state (a crystal below its plastic threshold), to be compared "
+        "with the elastic branch, not the hydrostatic Hugoniot"
+    )
+
+
 def ahead_seen(values: dict) -> bool:
     """Whether the state ahead of the front was measured: ρ, u and P of the slab ahead
     finite (some sample had a slab of ``MIN_SLAB_BINS`` bins clear of the front and of the
@@ -182,13 +193,7 @@ def named_causes(
             "unnoticed): leave more room ahead of the front"
         )
     if elastic_front(values, pole):
-        jump = values["P"] - pole.P0
-        out.append(
-            f"front not yielded: the slab holds a shear stress of {values['shear_stress']:.4g}"
-            f" ± {values['shear_stress_err']:.2g}, {values['shear_stress'] / jump:.1%} of "
-            "P − P0: an elastic, uniaxially strained state (a crystal below its plastic "
-            "threshold), to be compared with the elastic branch, not the hydrostatic Hugoniot"
-        )
+        out.append(elastic_text(values, pole))
     off = ahead_off_pole(values, residual_tol, pole)
     if off is not None:
         frac, key, d = off

@@ -60,7 +60,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.causes import CLOSE_SIGMAS, closes, elastic_front, residual_text, shear_stress
+from ..analysis.causes import (
+    CLOSE_SIGMAS,
+    closes,
+    elastic_front,
+    elastic_text,
+    residual_text,
+    shear_stress,
+)
 from ..analysis.linear_hugoniot import shock_velocity
 from ..analysis.shock import jump_residual_errors, jump_residuals
 from ..analysis.stats import block_average
@@ -575,9 +582,7 @@ def shock_frame_point(
         if not closing.get("momentum", True):
             causes.append("the state is off the Rayleigh line (momentum residual)")
         if values["elastic_front"]:
-            causes.append(f"not yielded: a shear stress of {values['shear_stress']:.4g}, "
-                          f"{values['shear_stress'] / (st['P'] - pole.P0):.1%} of P − P0 (the "
-                          "elastic branch)")  # fmt: skip
+            causes.append(elastic_text(values, pole))
         if not closing.get("energy", True):
             causes.append("the state is off the Hugoniot (energy residual)")
         if not closing.get("mass", True):

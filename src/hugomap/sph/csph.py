@@ -179,9 +179,8 @@ def floored_inverse(mxx: float, mxy: float, myy: float) -> tuple[float, float, f
     bx, by = l1 - myy, mxy
     if ax * ax + ay * ay < bx * bx + by * by:
         ax, ay = bx, by
+    # λ_1 < λ_2 here (q > 0), so the larger form is never the zero vector
     norm = math.sqrt(ax * ax + ay * ay)
-    if norm == 0.0:  # M = λ I: both eigenvalues equal, so λ_1 = λ_2 ≥ floor above
-        return 1.0 / l2, 0.0, 1.0 / l2
     ax /= norm
     ay /= norm
     # B = (1/λ_2)(I − a aᵀ) + (1/floor) a aᵀ
