@@ -278,3 +278,92 @@ def test_the_inflow_screen_runs_on_lammps_as_on_the_numba_md() -> None:
     res.close()
     assert 0 < err_l < 0.05 and 0 < err_m < 0.05, (err_l, err_m)
     assert abs(du_l - du_m) < 3.0 * np.hypot(err_l, err_m), (du_l, err_l, du_m, err_m)
+
+
+def test_the_live_inflow_runs_on_lammps_as_on_the_numba_md() -> None:
+    """``particles.live_inflow`` through ``LammpsKit``: the live reservoir a LAMMPS periodic
+    box stepped beside the window, the copy driven onto its trajectories. One snapshot made
+    by LAMMPS, fed live as a uniform flow (V = 10.7 σ/τ) through a 14-σ window by LAMMPS and
+    by the numba MD (the same truncated-and-shifted LJ, velocity Verlet at the same dt):
+    the flows fed in agree within 3 of their combined block errors (as the frozen screen's
+    do, above). A copy driven in the wrong units, a velocity written to a copy of LAMMPS's
+    array and lost, or an image index off by one would part them by O(V)."""
+    from hugomap.lammps.window import LammpsKit
+    from hugomap.md.kit import MDKit
+    from hugomap.md.potential import LJParams
+    from hugomap.particles.reservoir import InflowScreen, inflow_drift, make_reservoir
+
+    kit = LammpsKit(_scene()["model"])
+    res, _ = make_reservoir(kit, (4, 4), 0.8, 2.0, DT, 5, 0.3, n_candidates=4, every=10,
+                            pole_time=0.5)  # fmt: skip
+    screen = InflowScreen(10.7, 2.0, 9.0, 3.0, 2.0, 25, 4.0, 1, 0.001, inflow="live")
+    du_l, err_l = inflow_drift(kit, res, screen)
+    md = MDKit(LJParams(rc=2.5, shift=True, skin=0.3))
+    x, v = res.state.x.copy(), res.state.v.copy()
+    du_m, err_m = inflow_drift(md, md.periodic(x, v, res.state.L.copy(), DT), screen)
+    res.close()
+    assert 0 < err_l < 0.05 and 0 < err_m < 0.05, (err_l, err_m)
+    assert abs(du_l - du_m) < 3.0 * np.hypot(err_l, err_m), (du_l, err_l, du_m, err_m)
+
+
+def test_a_live_copper_window_checkpoints_its_reservoir(tmp_path) -> None:
+    """A LAMMPS crystal scene's inflow is live by default (``scene_config.resolve_defaults``:
+    a frozen copy pushes the crystal it releases, ``particles.live_inflow``); a small EAM
+    copper window with a live inflow releases atoms one by one as their images cross x_hi,
+    and its checkpoint holds the live reservoir (a LAMMPS periodic box) with each atom's
+    unwrapped position and next image, so a window loaded back feeds on from the same
+    trajectories and runs on."""
+    from hugomap.lammps.backend import METAL_BACKEND
+    from hugomap.lammps.simulation import LammpsSimulation
+    from hugomap.lammps.window import LammpsKit
+    from hugomap.particles.fcc import fcc_positions, maxwell_velocities
+    from hugomap.particles.live_inflow import LiveReservoir
+    from hugomap.particles.reservoir import make_reservoir
+    from hugomap.particles.window import ParticleWindow
+
+    cu = {"solver": "lammps", "phase": "crystal", "schemes": ["amw"],
+          "model": {"units": "metal", "pair_style": "eam/alloy",
+                    "pair_coeff": ["* * Cu_mishin1.eam.alloy Cu"], "mass": 63.546},
+          "sample": {"lattice_constant": 3.615, "T0": 300.0, "cells": [40, 4, 4]},
+          "shock": {"u_p": [1000.0]},
+          "reference": {"model": "linear_us_up", "c0": 3940.0, "s": 1.49}}  # fmt: skip
+    sc = validate_config({"scenes": {"cu": cu}})["scenes"]["cu"]
+    assert sc["window"]["inflow"] == "live"
+    liquid = validate_config({"scenes": {"t": copy.deepcopy(LJ)}})["scenes"]["t"]
+    assert liquid["window"]["inflow"] == "frozen"
+    x, L = fcc_positions((14, 4, 4), sc["sample"]["rho0"])
+    v = maxwell_velocities(x.shape[0], 8.617333262e-5 * 300.0 / (63.546 * 1.0364269e-4), 1)
+    sim = LammpsSimulation(x, v, np.arange(x.shape[0]), L, np.array([0.0, 0.0, L[0], 0.0]),
+                           sc["model"], 0.001)  # fmt: skip
+    METAL_BACKEND.start_piston(METAL_BACKEND.view(sim), sc, 1000.0)
+    sim.advance(20)
+    kit = LammpsKit(sc["model"])
+    res, _ = make_reservoir(kit, (4, 4), sc["sample"]["rho0"], 300.0, 0.001, 2, 0.05, 0.05,
+                            n_candidates=2, every=10, pole_time=0.1)  # fmt: skip
+    win = ParticleWindow.from_piston(sim, res, x_front=25.0, u_p=10.0, D_guess=54.0, length=16.0,
+                               front_fraction=0.5, ghost_width=6.0, cut_every=4.0,
+                               sync_steps=25, crystal=True, lattice=3.615, kit=kit,
+                               inflow="live")  # fmt: skip
+    assert isinstance(win.live, LiveReservoir)
+    n0 = win.next_id
+    win.advance(100)  # 5.4 Å fed in at 54 Å/ps: about three planes released
+    assert win.next_id > n0 and win.live.image.max() == 1
+    s = win.sim.state
+    copy_ = (s.ids < 0) & (s.ids >= -win.n_res)
+    # the copy sits on its reservoir images (driven there each step)
+    X = win.live.images(-1 - s.ids[copy_], win.x_face_in)
+    d = X - s.x[copy_]
+    d[:, 1:] -= s.L[1:] * np.rint(d[:, 1:] / s.L[1:])
+    assert np.abs(d).max() < 1e-6
+    path = METAL_BACKEND.save(METAL_BACKEND.window_view(win), tmp_path / "w.nc", None,
+                              {"status": "ok"})  # fmt: skip
+    back = METAL_BACKEND.load_window(METAL_BACKEND.read_checkpoint(path), path).sim
+    np.testing.assert_array_equal(back.live.unwrap, win.live.unwrap)
+    np.testing.assert_array_equal(back.live.image, win.live.image)
+    for a, b in zip(win.live.sim.arrays(), back.live.sim.arrays(), strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert back.live.seam_work == "kept"
+    back.advance(50)  # it feeds on
+    assert back.next_id > win.next_id
+    with pytest.raises(Exception, match="keeps the seam's work"):
+        kit.live_reservoir(res.state.x, res.state.v, res.state.L, 0.001, "returned")

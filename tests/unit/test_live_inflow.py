@@ -130,7 +130,7 @@ def test_a_live_copy_is_the_whole_snapshot_and_a_bad_kind_is_refused(window) -> 
 
 
 def test_the_seams_excess_work_is_taken_back_with_momentum_kept(window) -> None:
-    """``LiveReservoir.return_seam_work``: each released atom by the seam has a twin, its
+    """``MDLiveReservoir.return_seam_work``: each released atom by the seam has a twin, its
     reservoir atom carried on from the image it left, which sits where the atom was released
     (round-off: 1e-9 σ); the window's atoms there lose exactly the copy's excess work W = dt
     (``pair_power`` on them − on their twins), taken from those within rc of the copy (their

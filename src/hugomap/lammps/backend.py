@@ -409,7 +409,8 @@ class LammpsBackend:
         through ``window.LammpsKit``). ``front``,
         ``u_p``, ``D_guess`` arrive in the frame's units (metal: SI) and are converted to
         the simulation's; the returned window, pole and ω are in the frame's. A crystal's
-        reservoir and seam are at the sample's lattice (``_lattice_density``)."""
+        reservoir and seam are at the sample's lattice (``_lattice_density``); its inflow
+        copy ``window.inflow`` (live: ``particles.live_inflow``, the seam's work kept)."""
         from ..methods.control import OmegaSignal
         from ..particles.reservoir import inflow_screen, make_reservoir
         from ..particles.window import ParticleWindow
@@ -426,7 +427,8 @@ class LammpsBackend:
             kit, (s["cells"][1], s["cells"][2]), rho_c, s["T0"],
             sim.dt, s["seed"] + 7919, w["reservoir_equilibrate_time"], s["thermostat_tau"],
             E0_target=e_n if fluid else None, min_length=w["reservoir_length"],
-            screen=inflow_screen(w, sh["gap"], self._native_velocity(D_guess)) if fluid else None,
+            screen=(inflow_screen(w, sh["gap"], self._native_velocity(D_guess))
+                    if fluid and w["inflow"] == "frozen" else None),
         )  # fmt: skip
         inflow = self._pole_from_native(scene, inflow)
         log.info("inflow pole: %s", json.dumps(inflow))
@@ -436,6 +438,7 @@ class LammpsBackend:
             self._native_velocity(D_guess), w["length"], w["front_fraction"], w["ghost_width"],
             w["cut_every"], w["sync_steps"], crystal=not fluid,
             lattice=lattice_constant(rho_c), kit=kit, segment=w["reservoir_segment"],
+            inflow=w["inflow"], seam_work="kept",
         )  # fmt: skip
         res.close()
         wpole = pole if fluid else Pole.from_dict(inflow)

@@ -171,7 +171,8 @@ def model_cutoff(model: dict) -> float:
 
 
 def resolve_defaults(scene: dict) -> None:
-    """The defaults of the scene's unit system (``DEFAULTS``), ``sample.rho0`` = 4/a³ from
+    """The defaults of the scene's unit system (``DEFAULTS``), ``window.inflow`` by phase
+    (live for a crystal, frozen for a liquid), ``sample.rho0`` = 4/a³ from
     ``sample.lattice_constant`` a (when rho0 is not given), and units metal's
     ``shock.bin_width`` = a (when not given). A key the schema left out (a units value it
     refused) is not resolved: ``check`` names it."""
@@ -182,6 +183,9 @@ def resolve_defaults(scene: dict) -> None:
             where = where.setdefault(name, {})
         for k, v in values.items():
             where.setdefault(k, v)
+    # a crystal's frozen copy pushes the crystal it releases (``particles.live_inflow``)
+    window = scene.setdefault("window", {})
+    window.setdefault("inflow", "live" if scene.get("phase") == "crystal" else "frozen")
     smp = scene["sample"]
     if "rho0" not in smp and "lattice_constant" in smp:
         smp["rho0"] = 4.0 / float(smp["lattice_constant"]) ** 3

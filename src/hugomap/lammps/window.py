@@ -23,6 +23,7 @@ import xarray as xr
 
 from ..failures import WindowError
 from ..io.checkpoint import LAMMPS_WINDOW_CHECKPOINT, CheckpointKind
+from ..particles.live_inflow import LiveReservoir
 from .simulation import NATIVE_NAMES, LammpsSimulation
 from .units import UNIT_SYSTEMS
 
@@ -114,11 +115,20 @@ class LammpsKit:
 
     def live_reservoir(
         self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float, seam_work: str
-    ) -> None:
-        """None to give: the live inflow (``md.live_inflow``) is the numba MD's alone, refused
-        (``WindowError`` "bad_config")."""
-        raise WindowError("bad_config", "a live inflow reservoir runs on the numba MD backend only")
+    ) -> LiveReservoir:
+        """The live inflow (``particles.live_inflow.LiveReservoir``): these atoms, positions
+        [σ | Å] and velocities [σ/τ | Å/ps] in the reservoir's rest frame, as a periodic NVE
+        LAMMPS box of side ``L`` stepped by ``dt`` [τ | ps] beside the window. The seam's
+        work is kept (``seam_work`` "kept"): taking it back needs the pair forces between
+        the copy and the window's atoms, which the numba MD computes and LAMMPS does not
+        give (``WindowError`` "bad_config" for "returned")."""
+        if seam_work != "kept":
+            raise WindowError(
+                "bad_config",
+                f"a LAMMPS window's live inflow keeps the seam's work, not {seam_work!r}",
+            )
+        return LiveReservoir(self.periodic(x, v, L, dt), seam_work="kept")
 
-    def load_live(self, ds: xr.Dataset, source: str | os.PathLike | None) -> None:
-        """None: a LAMMPS window has no live reservoir (``live_reservoir`` refuses one)."""
-        return None
+    def load_live(self, ds: xr.Dataset, source: str | os.PathLike | None) -> LiveReservoir | None:
+        """The live reservoir a window checkpoint holds, or None."""
+        return LiveReservoir.from_dataset(ds, source, LammpsSimulation.from_dataset)

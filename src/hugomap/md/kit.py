@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from ..io.checkpoint import MD_WINDOW_CHECKPOINT, CheckpointKind
-from .live_inflow import LiveReservoir
+from .live_inflow import MDLiveReservoir
 from .potential import LJParams
 from .sample import fcc_state
 from .simulation import MDSimulation
@@ -86,13 +86,13 @@ class MDKit:
 
     def live_reservoir(
         self, x: np.ndarray, v: np.ndarray, L: np.ndarray, dt: float, seam_work: str
-    ) -> LiveReservoir:
-        """The live inflow (``md.live_inflow.LiveReservoir``): these atoms, positions [σ]
+    ) -> MDLiveReservoir:
+        """The live inflow (``md.live_inflow.MDLiveReservoir``): these atoms, positions [σ]
         and velocities [σ/τ] in the reservoir's rest frame, as a periodic NVE box of side
         ``L`` [σ] stepped by ``dt`` [τ] beside the window; ``seam_work`` "returned" or
         "kept"."""
-        return LiveReservoir(self.periodic(x, v, L, dt), seam_work=seam_work)
+        return MDLiveReservoir(self.periodic(x, v, L, dt), seam_work=seam_work)
 
-    def load_live(self, ds: xr.Dataset, source: str | os.PathLike | None) -> LiveReservoir | None:
+    def load_live(self, ds: xr.Dataset, source: str | os.PathLike | None) -> MDLiveReservoir | None:
         """The live reservoir a window checkpoint holds, or None."""
-        return LiveReservoir.from_dataset(ds, source)
+        return MDLiveReservoir.from_dataset(ds, source)

@@ -7,6 +7,7 @@ disturbance is each snapshot's own). Any particle backend, through its kit
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 
@@ -17,6 +18,8 @@ from ..failures import WindowError
 from .fcc import lattice_constant
 from .kit import ParticleKit, ParticleSim
 from .window import ParticleWindow
+
+log = logging.getLogger(__name__)
 
 
 def make_reservoir(
@@ -92,6 +95,7 @@ def make_reservoir(
                     raise
                 continue
             d, d_err = inflow_drift(kit, cand, screen)
+            log.info("inflow candidate %d: flow %+.4g ± %.2g", tried, d, d_err)
             if best is None or abs(d) < abs(best[1]):
                 _close(best[0] if best is not None else None)
                 best = (cand, d, d_err)

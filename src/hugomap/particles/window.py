@@ -17,7 +17,7 @@ snapshot, and the last and the first are the snapshot's periodic image, so the s
 two copies is never a cut: no gap, no overlap. The flow a snapshot feeds in is off u_in by
 a disturbance of its own that shrinks as the snapshot grows (``particles.reservoir``); segments
 let a long snapshot feed the window at the cost of a short one. That is the frozen inflow
-(``inflow = "frozen"``). The live one (``inflow = "live"``, ``md.live_inflow``) runs the
+(``inflow = "frozen"``). The live one (``inflow = "live"``, ``particles.live_inflow``) runs the
 snapshot on beside the window: the copy behind ``x_hi`` follows the reservoir's trajectories
 (``_drive_copy``, every step) and each atom is released, with the reservoir's state, at the
 boundary update after it crosses ``x_hi``, its next image laid L_r behind; it feeds no flow
@@ -65,8 +65,8 @@ reservoir, the live one), loading one, its cutoff, units and checkpoint kind, co
 window with that kit by default), ``lammps.window.LammpsKit`` for LAMMPS. All lengths, times
 and velocities are the simulation's own units; the fixed lengths of the set-up (``MARGIN``,
 the seam's overlap distance, the walls' layer) are multiples of the kit's ``scale`` (MD:
-1 σ). The live inflow is the numba MD's alone (``kit.live_reservoir``; LAMMPS's kit refuses
-it).
+1 σ). The live reservoir is the kit's (``kit.live_reservoir``); only the numba MD's takes the
+seam's excess work back (``md.live_inflow.MDLiveReservoir``).
 """
 
 from __future__ import annotations
@@ -389,10 +389,10 @@ class ParticleWindow:
 
     def _drive_copy(self) -> None:
         """Live inflow: take back the copy's excess work of the coming step if it is returned
-        (``md.live_inflow.LiveReservoir.return_seam_work``), step the reservoir and give each
+        (``md.live_inflow.MDLiveReservoir.return_seam_work``), step the reservoir and give each
         atom of the copy behind ``x_hi`` the velocity that carries it, in the coming step,
         onto its reservoir trajectory's image (``LiveReservoir.images``; module docstring of
-        ``md.live_inflow``)."""
+        ``particles.live_inflow``)."""
         s, dt = self.sim.state, self.sim.dt
         copy = (s.ids < 0) & (s.ids >= -self.n_res)
         if self.live.seam_work == "returned":  # the window and the reservoir both at t
@@ -401,7 +401,9 @@ class ParticleWindow:
         X = self.live.images(-1 - s.ids[copy], self.x_face_in + self.u_in * dt)
         d = X - s.x[copy]
         d[:, 1:] -= s.L[1:] * np.rint(d[:, 1:] / s.L[1:])
-        s.v[copy] = d / dt
+        v = s.v
+        v[copy] = d / dt
+        s.v = v  # a LAMMPS state on several ranks holds copies: assigned back
 
     def _lag(self) -> float:
         """How far past x_hi an image travels between two releases [σ]."""
