@@ -108,6 +108,8 @@ def point_row(path: Path, case: str) -> dict | None:
             "P_err": _scalar(ds, "P_err"),
             "P_rel_err": _scalar(ds, "P_err") / abs(_scalar(ds, "P") - _scalar(ds, "P0")),
             "average_time": _scalar(ds, "average_time"),
+            "u_p_jump": _scalar(ds, "u_p_jump"),
+            "u_p_measured": _scalar(ds, "u_p_measured"),
         }
         if scene.get("solver") == "csph" and "alpha" in ds:
             row.update(_compaction_reference(ds, scene))
@@ -270,25 +272,56 @@ def collect(roots: list[Path], case: str, scenes: list[str]) -> list[dict]:
     return rows
 
 
-def with_reference(rows: list[dict], roots: list[Path], scheme: str) -> None:
-    """Each row's deviation from the same sweep's ``scheme`` point at its u_p (e.g. nphug:
-    the same potential's Hugoniot at the same pole, in a periodic box): ``D_ref``,
-    ``P_ref`` with their errors, ``D_dev`` = D/D_ref − 1 and ``P_dev`` likewise, each with
-    its combined standard error (``*_dev_err``)."""
-    refs = {}
+def _reference_points(roots: list[Path], scheme: str) -> dict[tuple, list[dict]]:
+    """The sweep's ``scheme`` points by (root, scene): each its own u_p (``u_p_measured``,
+    the velocity its box reached; else the scene's), D, P with their errors and its pole."""
+    refs: dict[tuple, list[dict]] = {}
     for root in roots:
         for path in root.glob(f"*/up*/{scheme}.nc"):
             with xr.open_dataset(path) as ds:
-                if "D" in ds:
-                    u = _scalar(ds, "piston_velocity")
-                    refs[(_label(root), path.parts[-3], u)] = {
-                        k: _scalar(ds, k) for k in ("D", "D_err", "P", "P_err")
-                    }  # fmt: skip
+                if "D" not in ds:
+                    continue
+                pt = {k: _scalar(ds, k) for k in ("D", "D_err", "P", "P_err", "rho0", "P0")}
+                u = _scalar(ds, "u_p_measured")
+                pt["u"] = u if np.isfinite(u) else _scalar(ds, "piston_velocity")
+                refs.setdefault((_label(root), path.parts[-3]), []).append(pt)
+    return refs
+
+
+def reference_at(points: list[dict], u: float) -> dict | None:
+    """The reference Hugoniot at particle velocity ``u``: D linear in u through the two
+    reference points nearest in u (Us–up is linear to a few 0.1 % over their spacing; EAM
+    copper's nphug points 1500 and 2000 m/s apart by 500 m/s), its error from theirs with
+    the interpolation's weights, and P = P0 + ρ0 D u on the reference's own Rayleigh line
+    (momentum, exact for a shock-frame box). None with fewer than two points."""
+    pts = sorted(points, key=lambda p: abs(p["u"] - u))[:2]
+    if len(pts) < 2 or pts[0]["u"] == pts[1]["u"]:
+        return None
+    p1, p2 = pts
+    w2 = (u - p1["u"]) / (p2["u"] - p1["u"])
+    D = (1.0 - w2) * p1["D"] + w2 * p2["D"]
+    D_err = float(np.hypot((1.0 - w2) * p1["D_err"], w2 * p2["D_err"]))
+    rho0, P0 = p1["rho0"], p1["P0"]
+    return {"D": D, "D_err": D_err, "P": P0 + rho0 * D * u, "P_err": rho0 * abs(u) * D_err}
+
+
+def with_reference(rows: list[dict], roots: list[Path], scheme: str) -> None:
+    """Each row's deviation from the same sweep's ``scheme`` Hugoniot (e.g. nphug: the same
+    potential's Hugoniot at the same pole, in a periodic box) at the row's own jump velocity
+    (``u_p_jump``: a window's slab moves at its own u, 0.4–0.8 % below the scene's u_p on
+    EAM copper, and its point is the Hugoniot's there; a piston's is its velocity),
+    ``reference_at``: ``D_ref``, ``P_ref`` with their errors, ``u_ref``, ``D_dev`` =
+    D/D_ref − 1 and ``P_dev`` likewise, each with its combined standard error
+    (``*_dev_err``)."""
+    refs = _reference_points(roots, scheme)
     for r in rows:
-        ref = refs.get((r["root"], r["scene"], r["u_p"]))
+        # the jump's velocity; a shock-frame box's own; else the scene's
+        u = next((v for v in (r.get("u_p_jump", np.nan), r.get("u_p_measured", np.nan), r["u_p"])
+                  if np.isfinite(v)), r["u_p"])  # fmt: skip
+        ref = reference_at(refs.get((r["root"], r["scene"]), []), u)
         if ref is None:
             continue
-        r["reference_scheme"] = scheme
+        r["reference_scheme"], r["u_ref"] = scheme, float(u)
         for q in ("D", "P"):
             value = r[q] if q in r else float("nan")
             r[f"{q}_ref"], r[f"{q}_ref_err"] = ref[q], ref[f"{q}_err"]
