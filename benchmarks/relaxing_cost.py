@@ -308,7 +308,7 @@ def reference_at(points: list[dict], u: float) -> dict | None:
 def with_reference(rows: list[dict], roots: list[Path], scheme: str) -> None:
     """Each row's deviation from the same sweep's ``scheme`` Hugoniot (e.g. nphug: the same
     potential's Hugoniot at the same pole, in a periodic box) at the row's own jump velocity
-    (``u_p_jump``: a window's slab moves at its own u, 0.4–0.8 % below the scene's u_p on
+    (``u_p_jump``: a window's slab moves at its own u, up to 0.8 % off the scene's u_p on
     EAM copper, and its point is the Hugoniot's there; a piston's is its velocity),
     ``reference_at``: ``D_ref``, ``P_ref`` with their errors, ``u_ref``, ``D_dev`` =
     D/D_ref − 1 and ``P_dev`` likewise, each with its combined standard error
