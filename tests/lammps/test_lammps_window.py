@@ -185,6 +185,31 @@ def test_window_checkpoint_round_trip_and_refusal(window) -> None:
         BACKEND.load_window(p.load(), plain)
 
 
+#: A small EAM copper scene (units metal) for the copper windows below.
+CU = {"solver": "lammps", "phase": "crystal",
+      "model": {"units": "metal", "pair_style": "eam/alloy",
+                "pair_coeff": ["* * Cu_mishin1.eam.alloy Cu"], "mass": 63.546},
+      "sample": {"lattice_constant": 3.615, "T0": 300.0, "cells": [40, 4, 4]},
+      "shock": {"u_p": [1000.0]},
+      "reference": {"model": "linear_us_up", "c0": 3940.0, "s": 1.49}}  # fmt: skip
+
+
+def _copper_piston(sc: dict):
+    """A 14-cell copper sample at 300 K (Maxwell velocities: variance k_B T/(m mvv2e)
+    [Å²/ps²]) driven 20 steps by the scene's piston at 1000 m/s."""
+    from hugomap.lammps.backend import METAL_BACKEND
+    from hugomap.lammps.simulation import LammpsSimulation
+    from hugomap.particles.fcc import fcc_positions, maxwell_velocities
+
+    x, L = fcc_positions((14, 4, 4), sc["sample"]["rho0"])
+    v = maxwell_velocities(x.shape[0], 8.617333262e-5 * 300.0 / (63.546 * 1.0364269e-4), 1)
+    sim = LammpsSimulation(x, v, np.arange(x.shape[0]), L, np.array([0.0, 0.0, L[0], 0.0]),
+                           sc["model"], 0.001)  # fmt: skip
+    METAL_BACKEND.start_piston(METAL_BACKEND.view(sim), sc, 1000.0)
+    sim.advance(20)
+    return sim
+
+
 def test_copper_window_is_seen_in_si(tmp_path) -> None:
     """Units metal: a small EAM copper window (the crystal's seam in registry with the
     sample's planes, its reservoir made by LAMMPS with the scene's EAM) seen through
@@ -194,29 +219,17 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
     as the same SI view."""
     from hugomap.lammps.backend import METAL_BACKEND
     from hugomap.lammps.si import WindowSIView
-    from hugomap.lammps.simulation import LammpsSimulation
     from hugomap.lammps.window import LammpsKit
-    from hugomap.particles.fcc import fcc_positions, maxwell_velocities
     from hugomap.particles.reservoir import make_reservoir
     from hugomap.particles.window import ParticleWindow
 
-    cu = {"solver": "lammps", "phase": "crystal", "schemes": ["piston"],
-          "model": {"units": "metal", "pair_style": "eam/alloy",
-                    "pair_coeff": ["* * Cu_mishin1.eam.alloy Cu"], "mass": 63.546},
-          "sample": {"lattice_constant": 3.615, "T0": 300.0, "cells": [40, 4, 4]},
-          "shock": {"u_p": [1000.0]},
-          "reference": {"model": "linear_us_up", "c0": 3940.0, "s": 1.49}}  # fmt: skip
+    cu = {**CU, "schemes": ["piston"]}
     sc = validate_config({"scenes": {"cu": cu}})["scenes"]["cu"]
     assert sc["window"]["window_time"] == 2.0 and sc["window"]["ghost_width"] == 6.0
     # the window schemes validate in units metal too (their slab lengths reach the stages in
     # the frame's units, checked below)
     validate_config({"scenes": {"cu": {**cu, "schemes": ["amw", "mw", "dichotomy"]}}})
-    x, L = fcc_positions((14, 4, 4), sc["sample"]["rho0"])
-    v = maxwell_velocities(x.shape[0], 8.617333262e-5 * 300.0 / (63.546 * 1.0364269e-4), 1)
-    sim = LammpsSimulation(x, v, np.arange(x.shape[0]), L, np.array([0.0, 0.0, L[0], 0.0]),
-                           sc["model"], 0.001)  # fmt: skip
-    METAL_BACKEND.start_piston(METAL_BACKEND.view(sim), sc, 1000.0)
-    sim.advance(20)
+    sim = _copper_piston(sc)
     kit = LammpsKit(sc["model"])
     res, pole = make_reservoir(kit, (4, 4), sc["sample"]["rho0"], 300.0, 0.001, 2, 0.05,
                                0.05, n_candidates=4, every=10, pole_time=0.1)  # fmt: skip
@@ -253,15 +266,19 @@ def test_copper_window_is_seen_in_si(tmp_path) -> None:
     assert pole["rho0"] == pytest.approx(sc["sample"]["rho0"]) and 200 < pole["T0"] < 400
 
 
-def test_the_inflow_screen_runs_on_lammps_as_on_the_numba_md() -> None:
+@pytest.mark.parametrize("inflow", ["frozen", "live"])
+def test_the_inflow_runs_on_lammps_as_on_the_numba_md(inflow: str) -> None:
     """``particles.reservoir.inflow_drift`` through ``LammpsKit``: one snapshot, made by LAMMPS,
     fed as a uniform flow (V = 10.7 σ/τ) through a 14-σ window by LAMMPS and by the numba MD (the
-    same truncated-and-shifted LJ, velocity Verlet at the same dt). Measured: −0.0489 ±
-    0.043 σ/τ by both, equal to 1e-5 over these 6.4 τ (the two integrations stay together);
-    the bound asks only the statistical agreement, 3 of their combined block errors
-    (0.04 σ/τ each on this 6.8-σ-wide box over 4 τ), which holds where round-off has let
-    them part. A unit slip (a kit that took Å for σ, or ps for τ) or a sign error in the
-    window frame would put them apart by O(V)."""
+    same truncated-and-shifted LJ, velocity Verlet at the same dt), its copy frozen (the
+    screen's) or live (``particles.live_inflow``: the live reservoir a LAMMPS periodic box
+    stepped beside the window, the copy driven onto its trajectories). Measured, frozen:
+    −0.0489 ± 0.043 σ/τ by both, equal to 1e-5 over these 6.4 τ (the two integrations stay
+    together); the bound asks only the statistical agreement, 3 of their combined block
+    errors (0.04 σ/τ each on this 6.8-σ-wide box over 4 τ), which holds where round-off has
+    let them part. A unit slip (a kit that took Å for σ, or ps for τ), a sign error in the
+    window frame, a live copy driven in the wrong units, a velocity written to a copy of
+    LAMMPS's array and lost, or an image index off by one would put them apart by O(V)."""
     from hugomap.lammps.window import LammpsKit
     from hugomap.md.kit import MDKit
     from hugomap.md.potential import LJParams
@@ -270,33 +287,7 @@ def test_the_inflow_screen_runs_on_lammps_as_on_the_numba_md() -> None:
     kit = LammpsKit(_scene()["model"])
     res, _ = make_reservoir(kit, (4, 4), 0.8, 2.0, DT, 5, 0.3, n_candidates=4, every=10,
                             pole_time=0.5)  # fmt: skip
-    screen = InflowScreen(10.7, 2.0, 9.0, 3.0, 2.0, 25, 4.0, 1, 0.001)
-    du_l, err_l = inflow_drift(kit, res, screen)
-    md = MDKit(LJParams(rc=2.5, shift=True, skin=0.3))
-    x, v = res.state.x.copy(), res.state.v.copy()
-    du_m, err_m = inflow_drift(md, md.periodic(x, v, res.state.L.copy(), DT), screen)
-    res.close()
-    assert 0 < err_l < 0.05 and 0 < err_m < 0.05, (err_l, err_m)
-    assert abs(du_l - du_m) < 3.0 * np.hypot(err_l, err_m), (du_l, err_l, du_m, err_m)
-
-
-def test_the_live_inflow_runs_on_lammps_as_on_the_numba_md() -> None:
-    """``particles.live_inflow`` through ``LammpsKit``: the live reservoir a LAMMPS periodic
-    box stepped beside the window, the copy driven onto its trajectories. One snapshot made
-    by LAMMPS, fed live as a uniform flow (V = 10.7 σ/τ) through a 14-σ window by LAMMPS and
-    by the numba MD (the same truncated-and-shifted LJ, velocity Verlet at the same dt):
-    the flows fed in agree within 3 of their combined block errors (as the frozen screen's
-    do, above). A copy driven in the wrong units, a velocity written to a copy of LAMMPS's
-    array and lost, or an image index off by one would part them by O(V)."""
-    from hugomap.lammps.window import LammpsKit
-    from hugomap.md.kit import MDKit
-    from hugomap.md.potential import LJParams
-    from hugomap.particles.reservoir import InflowScreen, inflow_drift, make_reservoir
-
-    kit = LammpsKit(_scene()["model"])
-    res, _ = make_reservoir(kit, (4, 4), 0.8, 2.0, DT, 5, 0.3, n_candidates=4, every=10,
-                            pole_time=0.5)  # fmt: skip
-    screen = InflowScreen(10.7, 2.0, 9.0, 3.0, 2.0, 25, 4.0, 1, 0.001, inflow="live")
+    screen = InflowScreen(10.7, 2.0, 9.0, 3.0, 2.0, 25, 4.0, 1, 0.001, inflow=inflow)
     du_l, err_l = inflow_drift(kit, res, screen)
     md = MDKit(LJParams(rc=2.5, shift=True, skin=0.3))
     x, v = res.state.x.copy(), res.state.v.copy()
@@ -314,29 +305,16 @@ def test_a_live_copper_window_checkpoints_its_reservoir(tmp_path) -> None:
     unwrapped position and next image, so a window loaded back feeds on from the same
     trajectories and runs on."""
     from hugomap.lammps.backend import METAL_BACKEND
-    from hugomap.lammps.simulation import LammpsSimulation
     from hugomap.lammps.window import LammpsKit
-    from hugomap.particles.fcc import fcc_positions, maxwell_velocities
     from hugomap.particles.live_inflow import LiveReservoir
     from hugomap.particles.reservoir import make_reservoir
     from hugomap.particles.window import ParticleWindow
 
-    cu = {"solver": "lammps", "phase": "crystal", "schemes": ["amw"],
-          "model": {"units": "metal", "pair_style": "eam/alloy",
-                    "pair_coeff": ["* * Cu_mishin1.eam.alloy Cu"], "mass": 63.546},
-          "sample": {"lattice_constant": 3.615, "T0": 300.0, "cells": [40, 4, 4]},
-          "shock": {"u_p": [1000.0]},
-          "reference": {"model": "linear_us_up", "c0": 3940.0, "s": 1.49}}  # fmt: skip
-    sc = validate_config({"scenes": {"cu": cu}})["scenes"]["cu"]
+    sc = validate_config({"scenes": {"cu": {**CU, "schemes": ["amw"]}}})["scenes"]["cu"]
     assert sc["window"]["inflow"] == "live"
     liquid = validate_config({"scenes": {"t": copy.deepcopy(LJ)}})["scenes"]["t"]
     assert liquid["window"]["inflow"] == "frozen"
-    x, L = fcc_positions((14, 4, 4), sc["sample"]["rho0"])
-    v = maxwell_velocities(x.shape[0], 8.617333262e-5 * 300.0 / (63.546 * 1.0364269e-4), 1)
-    sim = LammpsSimulation(x, v, np.arange(x.shape[0]), L, np.array([0.0, 0.0, L[0], 0.0]),
-                           sc["model"], 0.001)  # fmt: skip
-    METAL_BACKEND.start_piston(METAL_BACKEND.view(sim), sc, 1000.0)
-    sim.advance(20)
+    sim = _copper_piston(sc)
     kit = LammpsKit(sc["model"])
     res, _ = make_reservoir(kit, (4, 4), sc["sample"]["rho0"], 300.0, 0.001, 2, 0.05, 0.05,
                             n_candidates=2, every=10, pole_time=0.1)  # fmt: skip

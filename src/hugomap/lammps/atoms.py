@@ -46,11 +46,11 @@ class PerAtomAccess:
 
     def _put(self, name: str, values: np.ndarray) -> None:
         """Per-atom ``name`` (x or v, (n, 3) in the order of ``_per_atom``) back into LAMMPS:
-        one rank in place (nothing to do when ``values`` is the view itself), several by a
-        scatter in id order (collective)."""
+        one rank in place (nothing to do when ``values`` is that memory itself, as the live
+        inflow's every-step write is), several by a scatter in id order (collective)."""
         if self.ranks == 1:
-            view = self._per_atom(name)
-            if values is not view:
+            view, values = self._per_atom(name), np.asarray(values, dtype=float)
+            if not (values.shape == view.shape and values.ctypes.data == view.ctypes.data):
                 view[:] = values
             return
         flat = np.ascontiguousarray(values, dtype=float).ravel()

@@ -113,6 +113,7 @@ class MDLiveReservoir(LiveReservoir):
         return work
 
     @classmethod
-    def from_dataset(cls, ds: xr.Dataset, source=None, load=None) -> MDLiveReservoir | None:
-        """The live reservoir stored in a window checkpoint, or None if it has none."""
-        return super().from_dataset(ds, source, MDSimulation.from_dataset if load is None else load)
+    def from_dataset(cls, ds: xr.Dataset, source=None) -> MDLiveReservoir | None:
+        """The live reservoir stored in a window checkpoint (its ``MDSimulation``), or None if
+        it has none."""
+        return super().from_dataset(ds, source, MDSimulation.from_dataset)

@@ -152,7 +152,7 @@ class LiveReservoir:
         return out
 
     @classmethod
-    def from_dataset(cls, ds: xr.Dataset, source=None, load=None) -> LiveReservoir | None:
+    def from_dataset(cls, ds: xr.Dataset, source, load) -> LiveReservoir | None:
         """The live reservoir stored in a window checkpoint, or None if it has none; ``load``
         (ds, source) → the reservoir's simulation (the kit's ``load``)."""
         key = LIVE_PREFIX + "attrs"
