@@ -35,10 +35,11 @@ from .campaign_expand import (  # noqa: F401 (re-exported: the campaign's public
     get_dotted,
     variants,
 )
+from .failures import MEASURED
 from .io.dataset import jump_velocity
 from .registry import backend, scene_schema, solver_of
 
-USABLE = ("ok", "not_converged")
+USABLE = MEASURED  # the points that carry a value
 
 
 def pareto_front(cost: np.ndarray, err: np.ndarray) -> np.ndarray:

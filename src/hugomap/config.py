@@ -188,6 +188,8 @@ def load_schema(path: str | Path | None = None) -> dict:
     }
     for name in reversed(list(registry.REGISTRY)):
         defs[f"{name}_scene"] = registry.scene_schema(name)
+        # the error target is every solver's: one definition, in the top-level schema
+        defs[f"{name}_scene"]["properties"]["target"] = {"$ref": "#/$defs/target"}
         if name == registry.DEFAULT_SOLVER:
             continue
         branch = {
@@ -206,16 +208,56 @@ def _scene_config(solver: str):
     return registry.scene_config(solver)
 
 
-def _scene_checks(cfg: dict) -> list[str]:
+def _scene_checks(cfg: dict, own_tol: set) -> list[str]:
     """Resolve every scene's remaining defaults (the only place they are filled: a validated
     scene is complete) and run its solver's cross-key checks; each message names every key
-    it depends on."""
+    it depends on. ``own_tol``: the scenes whose config gave ``shock.residual_tol``."""
     problems = []
     for name, sc in cfg.get("scenes", {}).items():
         solver = _scene_config(registry.solver_of(sc))
         solver.resolve_defaults(sc)
         problems += solver.check(f"scenes.{name}", sc, cfg)
+        problems += _target(name, sc, cfg, name in own_tol)
     return problems
+
+
+WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
+# With an error target (methods.target), shock.residual_tol defaults to this many times the
+# larger relative error asked: a residual combines the errors of D, u_p, ρ, P and E, each
+# near the target, and ok asks |r| ≤ 3 of its errors, so a tight target is held to a tight
+# closure and a loose one is not held to a tight one.
+TOL_PER_TARGET = 3.0
+
+
+def _target(name: str, sc: dict, cfg: dict, own_tol: bool) -> list[str]:
+    """The scene's error target (``methods.target``): the top-level ``target`` where the
+    scene has none; ``shock.residual_tol`` = ``TOL_PER_TARGET`` x the larger relative error
+    asked, unless the scene gives its own; refused: a target that asks for neither D nor
+    P, and a budget ``cpu_s`` below one control window of a scene that runs a window (the
+    backend's ``window_cpu_s``: the window's particles over ``window.window_time`` at its
+    fastest kernel rate, so a budget refused could not hold one window on any machine)."""
+    if "target" not in sc and cfg.get("target"):
+        sc["target"] = copy.deepcopy(cfg["target"])
+    t = sc.get("target")
+    if not t:
+        return []
+    at = key_path(("scenes", name, "target"))
+    asked = [float(t[q]) for q in ("D", "P") if q in t]
+    if not asked:
+        return [f"{at} = {_show(t)}: asks for no error; give D or P (relative standard "
+                f"errors, allowed range (0, 1])"]  # fmt: skip
+    if not own_tol:
+        sc["shock"]["residual_tol"] = min(1.0, TOL_PER_TARGET * max(asked))
+    schemes = sc.get("schemes", cfg.get("schemes", ["piston"]))
+    window_cpu = getattr(registry.backend(sc), "window_cpu_s", None)
+    if "cpu_s" not in t or window_cpu is None or not set(schemes) & set(WINDOW_SCHEMES):
+        return []
+    one = window_cpu(sc)
+    if one is not None and float(t["cpu_s"]) < one:
+        return [f"{at}.cpu_s = {_show(t['cpu_s'])}: below one control window of the scene "
+                f"({one:.3g} s at the fastest kernel rate: window.length, window.window_time, "
+                f"shock.dt); allowed range [{one:.3g}, 1e+09] s"]  # fmt: skip
+    return []
 
 
 def _solver_schemes(schema: dict) -> dict[str, list[str]]:
@@ -296,6 +338,17 @@ def _unshare(cfg: dict) -> None:
         pass
 
 
+def _own_residual_tol(cfg: dict) -> set:
+    """The scenes whose config gives ``shock.residual_tol`` (read before the schema fills
+    its default: with a target, the tolerance follows the target unless given)."""
+    scenes = cfg.get("scenes")
+    if not isinstance(scenes, dict):
+        return set()
+    return {n for n, sc in scenes.items()
+            if isinstance(sc, dict) and isinstance(sc.get("shock"), dict)
+            and "residual_tol" in sc["shock"]}  # fmt: skip
+
+
 def validate_config(cfg: Any, schema: dict | None = None) -> dict:
     """Validate ``cfg`` in place (filling defaults) and return it; raise ConfigError. The
     values of ``cfg`` are replaced by unshared copies first (``_unshare``).
@@ -306,6 +359,7 @@ def validate_config(cfg: Any, schema: dict | None = None) -> dict:
     """
     problems = _huge_integers(cfg)
     generated: list = []
+    own_tol: set = set()
     if isinstance(cfg, dict):
         _unshare(cfg)
         if not problems:
@@ -318,6 +372,7 @@ def validate_config(cfg: Any, schema: dict | None = None) -> dict:
                 raise ConfigError(
                     "invalid config:\n  campaign: nested too deeply (a recursive YAML anchor?)"
                 ) from None
+            own_tol = _own_residual_tol(cfg)
     if not problems:
         schema = schema or load_schema()
         try:
@@ -342,7 +397,7 @@ def validate_config(cfg: Any, schema: dict | None = None) -> dict:
             )
         ]
     if not problems:
-        problems = _scene_checks(cfg)
+        problems = _scene_checks(cfg, own_tol)
     if problems:
         for v in generated:  # say where a generated scene's problem comes from
             problems = [

@@ -21,7 +21,12 @@ Hierarchy (what an ``except`` catches)::
 
 from __future__ import annotations
 
-# Every status a stage may end with other than ok/not_converged, and its cause (the failure
+# The statuses of a point that carries a value: ok (its jump conditions close, its slab is
+# steady, its errors meet the scene's target where it has one), target_not_reached (ok but
+# for errors above the target: methods.target), not_converged (a physical cause is named).
+MEASURED: tuple[str, ...] = ("ok", "target_not_reached", "not_converged")
+
+# Every status a stage may end with other than the measured ones, and its cause (the failure
 # labels of the stability map): a point file carries one of these with a diagnostic, never a
 # value. Value: (failure class, cause).
 FAILURES: dict[str, tuple[str, str]] = {

@@ -13,6 +13,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter  # noqa: E402
 
+from .failures import MEASURED  # noqa: E402
 from .io.dataset import jump_velocity  # noqa: E402
 
 
@@ -92,15 +93,19 @@ def hugoniot_figures(
             drawn = np.isfinite(x) & np.isfinite(y)
             ok = drawn & (status == "ok")
             nc = drawn & (status == "not_converged")
-            failed = ~np.isin(status, ("ok", "not_converged", "", "nan"))
+            tnr = drawn & (status == "target_not_reached")
+            failed = ~np.isin(status, (*MEASURED, "", "nan"))
             if ok.any():
                 ax.errorbar(x[ok], y[ok], xerr=xe[ok], yerr=ye[ok], fmt="o", color=color,
                             label=f"{sch} ({text['tag']})")  # fmt: skip
             if nc.any():
                 ax.errorbar(x[nc], y[nc], xerr=xe[nc], yerr=ye[nc], fmt="o", mfc="none",
                             color=color, label=f"{sch}, not converged")  # fmt: skip
+            if tnr.any():  # closed and steady, its errors above the scene's target
+                ax.errorbar(x[tnr], y[tnr], xerr=xe[tnr], yerr=ye[tnr], fmt="s", color=color,
+                            label=f"{sch}, target not reached")  # fmt: skip
             if xv == "u_p_measured":
-                m = (ok | nc) & np.isfinite(um) & np.isfinite(ume)
+                m = (ok | nc | tnr) & np.isfinite(um) & np.isfinite(ume)
                 if m.any():
                     ax.errorbar(um[m], y[m], xerr=ume[m], fmt="|", color=color, alpha=0.6,
                                 elinewidth=0.8, ms=6)  # fmt: skip

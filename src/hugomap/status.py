@@ -16,7 +16,7 @@ Snakemake state, so it works while a sweep runs, after it was killed, or on a co
     results/logs/<scene>/up<u>/<stage>.log         job logs (a Python traceback = a crash)
 
 One line per piston velocity and scheme of the config (top-level ``schemes``, or the scene's
-own ``scenes.<s>.schemes``), in one state: ``ok`` or ``not_converged`` (done), ``failed`` (the
+own ``scenes.<s>.schemes``), in one state: ``ok``, ``target_not_reached`` or ``not_converged`` (done: ``failures.MEASURED``), ``failed`` (the
 solver stopped with a status, a stage it depends on failed, the job crashed, or a file is
 unreadable), ``running``, or ``pending`` (nothing yet, or only the checkpoints it starts
 from). Running means: the piston has a periodic checkpoint and no final file (its simulated
@@ -41,10 +41,11 @@ from typing import Any, TextIO
 import xarray as xr
 
 from .config import load_config
+from .failures import MEASURED
 from .keys import point_tag
 
-DONE_STATES = ("ok", "not_converged")
-STATES = ("ok", "not_converged", "failed", "running", "pending")
+DONE_STATES = MEASURED
+STATES = (*MEASURED, "failed", "running", "pending")
 RESERVED = ("hugoniot", "figures", "logs", "campaign", "references")
 PART_SUFFIX = ".part.nc"
 SCHEMES = ("piston", "amw", "mw", "dichotomy", "msst", "nphug")  # every scheme the workflow knows
@@ -296,7 +297,7 @@ def _disk_points(results: Path, scene: str) -> dict[str, float]:
 
 def _counts(points: list[PointStatus]) -> dict[str, int]:
     counts = {s: sum(p.state == s for p in points) for s in STATES}
-    counts["done"] = counts["ok"] + counts["not_converged"]
+    counts["done"] = sum(counts[s] for s in MEASURED)
     counts["total"] = len(points)
     return counts
 
@@ -488,7 +489,9 @@ def _one_line(text: str, limit: int | None = None) -> str:
 
 def _counts_text(c: dict[str, int]) -> str:
     return (
-        f"{c['done']} done ({c['ok']} ok, {c['not_converged']} not converged), "
+        f"{c['done']} done ({c['ok']} ok, "
+        + (f"{c['target_not_reached']} target not reached, " if c["target_not_reached"] else "")
+        + f"{c['not_converged']} not converged), "
         f"{c['running']} running, {c['failed']} failed, {c['pending']} pending"
     )
 

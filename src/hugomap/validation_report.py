@@ -41,9 +41,11 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from .failures import MEASURED
+
 SCHEMES = ("piston", "amw", "mw", "dichotomy")
 SCHEME_NAMES = {"piston": "piston", "amw": "AMW", "mw": "MW", "dichotomy": "dichotomy"}
-USABLE = ("ok", "not_converged")
+USABLE = MEASURED  # the points that carry a value
 CASE_NAMES = {
     "lj_liquid": "LJ liquid",
     "cu_solid": "solid copper (1D)",

@@ -317,6 +317,8 @@ def _from_schema(sub: dict, example: object = _NONE, wild: bool = True) -> st.Se
             {k: one(k, v) for k, v in props.items() if k in required},
             optional={k: one(k, v) for k, v in props.items() if k not in required},
         )
+        if not wild and sub.get("minProperties"):  # near the tiny config: a valid size
+            good = good.filter(lambda d, n=sub["minProperties"]: len(d) >= n)
     else:
         good = json_like
     if not wild:

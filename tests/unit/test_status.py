@@ -148,7 +148,7 @@ def test_every_state_is_read(sweep: tuple[Path, Path]) -> None:
     assert pts["9"]["in_config"] is False and pts["9"]["state"] == "ok"
     assert all(p["in_config"] for t, p in pts.items() if t != "9")
     assert scene["counts_by_scheme"]["piston"] == {
-        "ok": 2, "not_converged": 1, "failed": 4, "running": 1, "pending": 2,
+        "ok": 2, "target_not_reached": 0, "not_converged": 1, "failed": 4, "running": 1, "pending": 2,
         "done": 3, "total": 10,
     }  # fmt: skip
     # The window schemes of these points: no window yet; they fail where the loading failed
@@ -162,11 +162,11 @@ def test_every_state_is_read(sweep: tuple[Path, Path]) -> None:
         assert w["2"]["status"] == w["2.5"]["status"] == "loaded"
         assert w["9"]["in_config"] is False
         assert scene["counts_by_scheme"][s] == {
-            "ok": 0, "not_converged": 0, "failed": 2, "running": 0, "pending": 8,
+            "ok": 0, "target_not_reached": 0, "not_converged": 0, "failed": 2, "running": 0, "pending": 8,
             "done": 0, "total": 10,
         }  # fmt: skip
     assert scene["counts"] == {
-        "ok": 2, "not_converged": 1, "failed": 8, "running": 1, "pending": 18,
+        "ok": 2, "target_not_reached": 0, "not_converged": 1, "failed": 8, "running": 1, "pending": 18,
         "done": 3, "total": 30,
     }  # fmt: skip
     assert scene["n_u_p"] == 10
@@ -410,7 +410,7 @@ def test_window_schemes(tmp_path: Path) -> None:
     assert mw["3.5"]["state"] == "failed" and "unreadable window.nc" in mw["3.5"]["diagnostic"]
     assert mw["4"]["diagnostic"] == "job crashed (window.log): MemoryError"
     assert scene["counts_by_scheme"]["mw"] == {
-        "ok": 0, "not_converged": 1, "failed": 4, "running": 1, "pending": 1,
+        "ok": 0, "target_not_reached": 0, "not_converged": 1, "failed": 4, "running": 1, "pending": 1,
         "done": 1, "total": 7,
     }  # fmt: skip
     assert scene["counts_by_scheme"]["dichotomy"]["failed"] == 6

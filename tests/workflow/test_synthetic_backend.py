@@ -67,6 +67,11 @@ def test_synthetic_sweep_through_snakemake(tmp_path: Path) -> None:
         assert np.allclose(p["P"].values, P, rtol=1e-9)
         for k in ("mass", "momentum", "energy"):
             assert np.all(np.abs(p[f"residual_{k}"].values) < 1e-4), (scheme, k)
+        # the scene's target, recorded with the errors reached (config: 0.1 %)
+        assert np.all(p["target_D"].values == 0.001) and np.all(p["target_P"].values == 0.001)
+        assert np.all(p["D_rel_err"].values <= 0.001), (scheme, p["D_rel_err"].values)
+        assert np.all(p["P_rel_err"].values <= 0.001), (scheme, p["P_rel_err"].values)
+        assert np.all(np.isfinite(p["time_to_target"].values))
     assert np.allclose(ds["ref_D"].values, C0 + S * ds["ref_u_p"].values)
     for png in ("exact_PV.png", "exact_D_up.png"):
         assert (tmp_path / "results" / "figures" / png).stat().st_size > 10_000

@@ -106,6 +106,15 @@ POINT_VARS: dict[str, tuple[str, str]] = {
         "rho0 D sqrt(max(0, (u_p_measured - u_p)^2 - u_p_measured_err^2)); 0 for a window "
         "point (its jump is taken at the slab's velocity)",
     ),
+    "D_rel_err": ("1", "relative standard error of D, D_err / D"),
+    "P_rel_err": ("1", "relative standard error of the stress jump, P_err / |P - P0|"),
+    "target_D": ("1", "the scene's target for D_rel_err (NaN: none asked)"),
+    "target_P": ("1", "the scene's target for P_rel_err (NaN: none asked)"),
+    "time_to_target": (
+        "tau",
+        "the averaging (window) or steady drive (piston) the point needed or would need to "
+        "meet its target, from its error-vs-time law; NaN without a target",
+    ),
     "n_samples": ("1", "profile samples averaged"),
     "average_time": ("tau", "window points: how long the steady state was averaged"),
     "wall_s": ("s", "wall-clock time of the point (load + drive)"),
@@ -187,7 +196,8 @@ def si_units(extra: dict[str, tuple[str, str]] | None = None) -> UnitTable:
 
 
 POINT_TEXT = {
-    "status": "ok, not_converged, or why the run stopped",
+    "status": "ok, target_not_reached (ok but its errors above the scene's target), "
+    "not_converged, or why the run stopped",
     "diagnostic": "what happened, for a failed or unconverged point",
 }
 

@@ -90,6 +90,9 @@ CRYSTAL_SOUND = {"lj": 8.0, "metal": 44.0}
 BASE_MB = 1024  # Python + xarray + liblammps
 BYTES_PER_ATOM = 2048  # LAMMPS arrays, ghosts and neighbour lists, x4 margin
 S_PER_ATOM_STEP = 3.0e-6
+# the fastest a LAMMPS atom-step runs on one core (lj/cut at 2.5 sigma ~2e-7 s here, EAM
+# copper ~2e-6; machines of this kind differ by 2x): a lower bound, for refusing a budget
+FASTEST_S_PER_ATOM_STEP = 1.0e-7
 
 
 def _area(solver) -> float:
@@ -628,6 +631,12 @@ class LammpsBackend:
     def sound_speed(self, scene: dict) -> float | None:
         """No model sound speed: the campaign fits one to the reference Hugoniot."""
         return None
+
+    def window_cpu_s(self, scene: dict) -> float:
+        """CPU seconds of one control window at the fastest rate: the window's atoms
+        (``scale``) over ``window.window_time``/``shock.dt`` steps [s]."""
+        steps = scene["window"]["window_time"] / scene["shock"]["dt"]
+        return self.scale(scene)["n_window"] * steps * FASTEST_S_PER_ATOM_STEP
 
     def scale(self, scene: dict) -> dict[str, float]:
         """As the MD backend's: atoms in a window of ``window.length`` (none here: NaN) at

@@ -35,6 +35,9 @@ BASE_MB = 1024  # Python + numba + xarray/netCDF: about 350 MB resident, measure
 # state ~0.2 kB + full Verlet list ~0.8 kB (int32 rows, rho* <= 1.5), x4 margin
 BYTES_PER_ATOM = 4096
 S_PER_ATOM_STEP = 1.0e-6  # 1-core kernel ~3e-7 s, x3: sampling, I/O
+# the fastest the kernel runs an atom-step on one core: ~3e-7 s measured, machines of this
+# kind differ by 2x (a lower bound, for refusing a budget no machine could keep)
+FASTEST_S_PER_ATOM_STEP = 1.5e-7
 REF_POLE_FACTOR, REF_MAX_ITER = 4, 10  # md.reference.reference_hugoniot defaults
 
 
@@ -406,6 +409,12 @@ class MDBackend:
     def sound_speed(self, scene: dict) -> float | None:
         """No model sound speed: the campaign fits one to the reference Hugoniot."""
         return None
+
+    def window_cpu_s(self, scene: dict) -> float:
+        """CPU seconds of one control window at the fastest kernel rate: the window's atoms
+        (``scale``) over ``window.window_time``/``shock.dt`` steps [s]."""
+        steps = scene["window"]["window_time"] / scene["shock"]["dt"]
+        return self.scale(scene)["n_window"] * steps * FASTEST_S_PER_ATOM_STEP
 
     def scale(self, scene: dict) -> dict[str, float]:
         """Particles in the window at ρ0 (ρ0 A L), its length in spacings ρ0^(-1/3)."""

@@ -144,7 +144,8 @@ def _check_data_file(base: str, smp: dict, L: list[float]) -> list[str]:
     try:
         st = data_state(smp["data_file"])
     except ValueError as exc:  # LammpsDataError, and a missing or unreadable file
-        return [f"{key}: {exc}"]
+        # the reason holds the path as given: one line, whatever characters it has
+        return [f"{key}: {' '.join(repr(str(exc))[1:-1].split())}"]
     problems = []
     n = 4 * smp["cells"][0] * smp["cells"][1] * smp["cells"][2]
     box = [float(v) for v in st.L]

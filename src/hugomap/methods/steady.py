@@ -14,6 +14,8 @@ is kept as ``D_front``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..analysis.shock import (
@@ -27,6 +29,7 @@ from ..analysis.stats import CorrelatedSlope, slope_scatter
 from ..states import Pole, Profile
 from .control import OmegaSignal, flat_omega_error
 from .protocol import WindowSolver
+from .target import AVERAGE_FACTOR, ErrorTarget, error_exponent, judge
 
 
 def unresolved(values: dict, residual_tol: float) -> bool:
@@ -51,6 +54,9 @@ def steady_state(
     left_gap: float | None = None,
     max_duration: float | None = None,
     ahead_gap: float | None = None,
+    target: ErrorTarget | None = None,
+    cpu: Callable[[], float] | None = None,
+    time_unit: str = "",
 ) -> tuple[dict, dict[str, np.ndarray]]:
     """Average the steady wave for ``duration`` (module docstring); returns the point's
     values and the samples (t, front, x_left, x_right, sums, stage, omega, and the slab
@@ -66,6 +72,13 @@ def steady_state(
     and its energy residual's error is 0.7-6.5 %; 100 τ: D within 0.16 % sd of the
     reference over eight seeds).
 
+    With an error ``target`` (``methods.target``) it also goes on while D's or P's
+    relative error misses it, up to ``max_duration`` (with none: ``AVERAGE_FACTOR``
+    ``duration``) and while the next chunk fits the budget ``target.cpu_s`` (``cpu()``: the
+    point's CPU seconds so far, its loading counted; the next chunk's cost taken as the
+    last one's); the point is then judged (``methods.target.judge``: ``target_not_reached``
+    with the time its own error law says it needs, in ``time_unit``).
+
     A particle count that never changed over the average (the front moved less than one
     particle's worth, L/|q_sh − q_up|) gets that quantum's uncertainty instead of the fit's
     0: two ends uniform within it, std quantum/√6 over the average. The slope's error is
@@ -74,12 +87,18 @@ def steady_state(
     g = win.geom
     step = max(win.dt, 1e-300) * every
     n = max(16, int(round(duration / step)))
-    n_max = max(n, int(round((max_duration or 0.0) / step)))
+    longest = max_duration or 0.0
+    if target is not None and longest <= duration:
+        longest = AVERAGE_FACTOR * duration
+    n_max = max(n, int(round(longest / step)))
     t: list[float] = []
     front: list[float] = []
     sums_all: list[np.ndarray] = []
     omega: list[float] = []
+    law: dict[str, list[float]] = {"T": [], "D": [], "P": []}
+    budget_spent = False
     while True:
+        c0 = cpu() if cpu is not None else 0.0
         for _ in range(min(n, n_max - len(t))):  # n_max ≥ n: the first chunk is whole
             win.advance(every)
             omega.append(signal(win))
@@ -89,10 +108,26 @@ def steady_state(
             sums_all.append(sums)
         r, h = _measure(win, profile, pole, signal, t, front, sums_all, omega, gap, avg_length,
                         residual_tol, left_gap, ahead_gap)  # fmt: skip
-        if len(t) >= n_max or not unresolved(r, residual_tol):
+        rel = ErrorTarget.relative_errors(r, pole.P0)
+        for k, v in (("T", len(t) * step), ("D", rel["D"]), ("P", rel["P"])):
+            law[k].append(v)
+        missed = target is not None and bool(target.missed(r, pole.P0))
+        if len(t) >= n_max or not (unresolved(r, residual_tol) or missed):
             break
+        if target is not None and target.cpu_s is not None and cpu is not None:
+            spent = cpu()
+            if spent + (spent - c0) > target.cpu_s:  # the next chunk would overrun it
+                budget_spent = True
+                break
     r["average_time"] = float(len(t) * step)
     _relaxation_zone(r, h, profile, pole, g.x_lo, gap, avg_length, residual_tol, left_gap)
+    laws = {q: error_exponent(law["T"], law[q]) for q in ("D", "P")}
+    r["status"], r["diagnostic"] = judge(
+        target, r, str(r["status"]), str(r["diagnostic"]), r["average_time"], P0=pole.P0,
+        exponents=laws, what="average", unit=f" {time_unit}" if time_unit else "",
+    )  # fmt: skip
+    if budget_spent and r["status"] != "ok":
+        r["diagnostic"] += f" (the budget target.cpu_s = {target.cpu_s:g} s is spent)"
     return r, h
 
 

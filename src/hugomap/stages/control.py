@@ -10,6 +10,7 @@ from pathlib import Path
 from ..failures import HugomapFailure
 from ..methods.control import amw, mw, recentre
 from ..methods.steady import steady_state
+from ..methods.target import ErrorTarget
 from ..registry import backend as backend_of
 from .files import Clock, info_of, write_extras
 from .window_files import failed_point, open_window, prior_cost, window_point
@@ -53,7 +54,9 @@ def control_point(
             values, h = steady_state(win, profile, pole, sig, cp.average_time, cp.every,
                                      cp.gap, cp.avg_length, sh["residual_tol"],
                                      cp.outflow_gap, cp.max_average_time,
-                                     ahead_gap=cp.ahead_gap)  # fmt: skip
+                                     ahead_gap=cp.ahead_gap, target=ErrorTarget.of_scene(scene),
+                                     cpu=lambda: clock.cost()["cpu_s"],
+                                     time_unit=b.units.axes["time"])  # fmt: skip
             status, diagnostic = str(values.pop("status")), str(values.pop("diagnostic"))
             log.info("%s: D = %.6g +- %.2g, u_p = %.6g, P = %.6g, %s", scheme, values["D"],
                      values["D_err"], values["u_p_set"], values["P"], status)  # fmt: skip

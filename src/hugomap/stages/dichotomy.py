@@ -20,6 +20,7 @@ from ..io.atomic import write_json
 from ..methods import dichotomy as dich
 from ..methods.control import fixed_run
 from ..methods.steady import steady_state
+from ..methods.target import ErrorTarget
 from ..registry import backend as backend_of
 from .files import Clock, info_of, open_dataset, write_extras
 from .window_files import failed_point, open_window, prior_cost, window_point
@@ -116,7 +117,10 @@ def dichotomy_point(
     try:
         values, h = steady_state(win, profile, pole, sig, cp.final_time, cp.every, cp.gap,
                                  cp.avg_length, sh["residual_tol"], cp.outflow_gap,
-                                 cp.max_average_time, ahead_gap=cp.ahead_gap)  # fmt: skip
+                                 cp.max_average_time, ahead_gap=cp.ahead_gap,
+                                 target=ErrorTarget.of_scene(scene),
+                                 cpu=lambda: clock.cost()["cpu_s"],
+                                 time_unit=b.units.axes["time"])  # fmt: skip
         status, diagnostic = str(values.pop("status")), str(values.pop("diagnostic"))
         log.info("dichotomy: D = %.6g +- %.2g, P = %.6g, %s", values["D"], values["D_err"],
                  values["P"], status)  # fmt: skip

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import xarray as xr
 
+from ..failures import MEASURED
 from ..io.atomic import mpi_size, write_netcdf
 from ..io.dataset import point_dataset, scalar_vars
 from ..methods.piston import History
@@ -105,7 +106,7 @@ def write_point(
 ) -> Path:  # fmt: skip
     """A point file (``io.dataset.point_dataset`` in the backend's units) with ``extra``
     variables and ``attrs``; a failed point is logged."""
-    if status not in ("ok", "not_converged"):
+    if status not in MEASURED:
         log.error("%s: %s", status, diagnostic)
     ds = point_dataset(values, pole, history, scheme, scene.get("name", ""), status, diagnostic,
                        scene, backend.units)  # fmt: skip

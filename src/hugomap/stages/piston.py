@@ -21,6 +21,7 @@ import xarray as xr
 from ..analysis.shock import measure_point
 from ..failures import CheckpointError, HugomapFailure
 from ..methods.piston import History, drive, steady_track
+from ..methods.target import ErrorTarget, judge
 from ..registry import backend as backend_of
 from ..states import PistonFrame, Pole
 from .files import (
@@ -232,6 +233,7 @@ def piston_point(
     a = h.arrays()
     if status == "ok":
         d = a["stage"] == 1
+        track = steady_track(a, frame)
         r = measure_point(
             {k: a[k][d] for k in ("t", "front", "x_left", "x_right", "sums")}, profile, pole,
             frame.u_behind, frame.u_ahead,
@@ -239,11 +241,16 @@ def piston_point(
             sh["avg_length"] if frame.avg_length is None else frame.avg_length,
             sh["residual_tol"],
             left_gap=frame.piston_gap,
-            track=steady_track(a, frame),
+            track=track,
             ahead_gap=frame.ahead_gap,
         )  # fmt: skip
         r.pop("u_p"), r.pop("u_p_err")  # u_p is exact: the dataset's coordinate
-        status, diagnostic = str(r.pop("status")), str(r.pop("diagnostic"))
+        # a piston cannot run on once its front nears the far end: it is judged on its
+        # steady track's span, and told the span it would need (methods.target)
+        span = float(np.ptp(track[0])) if len(track[0]) else 0.0
+        status, diagnostic = judge(ErrorTarget.of_scene(scene), r, str(r.pop("status")),
+                                   str(r.pop("diagnostic")), span, P0=pole.P0, what="drive",
+                                   unit=f" {b.units.axes['time']}")  # fmt: skip
         values.update(r)
         log.info("point: D = %.6g +- %.2g, u_p %.6g (measured %.6g), P = %.6g +- %.2g, %s",
                  r["D"], r["D_err"], u_p, r["u_p_measured"], r["P"], r["P_err"], status)  # fmt: skip

@@ -1,0 +1,188 @@
+"""An error target per scene (``methods.target``): a window's average goes on until its
+stated errors meet the target or its budget is spent, a point that misses it says so with
+the time its own error law needs, and a bad target is refused at validation.
+
+The held front is ``test_steady_average``'s toy: slabs with white noise of relative size 0.1
+per bin, so the slab's P error falls as T^(-1/2) — the law the point must find for itself."""
+
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from hugomap.config import TOL_PER_TARGET, ConfigError, validate_config
+from hugomap.methods.steady import steady_state
+from hugomap.methods.target import (
+    K_DEFAULT,
+    ErrorTarget,
+    error_exponent,
+    judge,
+    time_to_target,
+)
+from tests.unit.test_steady_average import _SIGNAL, POLE, _HeldFront, _Profile
+
+CHUNK = 0.16  # the toy's average_time: 16 samples of dt 0.01
+
+
+def _average(target: ErrorTarget | None, max_duration: float | None = None, cpu=None, seed=1):
+    win = _HeldFront(0.1, seed)
+    r, _ = steady_state(win, _Profile(), POLE, _SIGNAL, duration=CHUNK, every=1, gap=3.0,
+                        avg_length=20.0, residual_tol=0.05, max_duration=max_duration,
+                        target=target, cpu=cpu, time_unit="tau")  # fmt: skip
+    return r
+
+
+def test_a_window_averages_on_until_its_errors_meet_the_target():
+    """One chunk states P to ~0.7 %; a 0.3 % target needs several times as long. The average
+    stops at the first whole chunk that meets it: ok, with time_to_target the time it took;
+    without a target the same point stops after its one chunk."""
+    plain = _average(None)
+    assert plain["average_time"] == CHUNK
+    assert plain["P_rel_err"] > 0.003 and math.isnan(plain["target_P"])
+    r = _average(ErrorTarget(P=0.003))
+    assert r["status"] == "ok", r["diagnostic"]
+    assert r["P_rel_err"] <= 0.003 and r["target_P"] == 0.003
+    assert CHUNK < r["average_time"] <= 10 * CHUNK
+    assert r["time_to_target"] == r["average_time"]
+    assert round(r["average_time"] / CHUNK, 9) % 1 == 0  # whole chunks
+
+
+def test_a_point_that_misses_its_target_says_so_and_how_long_it_needs():
+    """Capped at two chunks, a 0.15 % target is out of reach: target_not_reached (the point
+    closes and is steady), naming P, the target and the time its own law asks for."""
+    capped = _average(ErrorTarget(P=0.0015), max_duration=2 * CHUNK)
+    assert capped["status"] == "target_not_reached", capped["diagnostic"]
+    assert capped["average_time"] == pytest.approx(2 * CHUNK)
+    d = capped["diagnostic"]
+    assert "P's error" in d and "target.P = 0.15 %" in d and "tau" in d
+    assert capped["time_to_target"] > 2 * CHUNK
+
+
+def test_the_time_a_point_says_it_needs_is_the_time_it_takes():
+    """Over 12 seeds, the time a point capped at four chunks says it needs for a 0.2 %
+    target, against the time an uncapped average of the same slab then takes: unbiased
+    (geometric mean of the ratios 1.27 measured; allowed 0.67-1.5) though single points
+    scatter by a factor ~3, the error of an 8-block error (~27 %) squared into time (each
+    allowed within 8x)."""
+    ratios = []
+    for seed in range(1, 13):
+        capped = _average(ErrorTarget(P=0.002), max_duration=4 * CHUNK, seed=seed)
+        free = _average(ErrorTarget(P=0.002), max_duration=200 * CHUNK, seed=seed)
+        assert free["status"] == "ok", free["diagnostic"]
+        ratios.append(capped["time_to_target"] / free["average_time"])
+    assert 1 / 8 < min(ratios) and max(ratios) < 8, ratios
+    assert 0.67 < math.exp(np.mean(np.log(ratios))) < 1.5, ratios
+
+
+def test_the_budget_ends_the_average():
+    """A CPU clock of 10 s per simulated time unit: a budget of 5 s fits three chunks (1.6 s
+    each), not the fourth; the point says the budget was spent."""
+    win_time = [0.0]
+
+    def cpu() -> float:
+        return 10.0 * win_time[0]
+
+    win = _HeldFront(0.1)
+    advance = win.advance
+
+    def timed(n: int) -> None:
+        advance(n)
+        win_time[0] = win.time
+
+    win.advance = timed
+    r, _ = steady_state(win, _Profile(), POLE, _SIGNAL, duration=CHUNK, every=1, gap=3.0,
+                        avg_length=20.0, residual_tol=0.05, max_duration=100 * CHUNK,
+                        target=ErrorTarget(P=0.0005, cpu_s=5.0), cpu=cpu)  # fmt: skip
+    assert r["average_time"] == pytest.approx(3 * CHUNK)
+    assert r["status"] == "target_not_reached"
+    assert "target.cpu_s = 5 s is spent" in r["diagnostic"]
+
+
+def test_judge_keeps_physical_verdicts_and_failures():
+    """Only an ok point becomes target_not_reached; a not_converged one keeps its status
+    and its cause, the missed target added; a failure is left alone; no target: NaN."""
+    values = {"D": 10.0, "D_err": 0.05, "P": 21.0, "P_err": 0.5}
+    v = dict(values)
+    assert judge(None, v, "ok", "", 4.0) == ("ok", "")
+    assert math.isnan(v["time_to_target"]) and v["D_rel_err"] == pytest.approx(0.005)
+    t = ErrorTarget(D=0.001)
+    v = dict(values)
+    status, diag = judge(t, v, "not_converged", "slab not steady", 4.0, P0=1.0)
+    assert status == "not_converged" and diag.startswith("slab not steady; target not reached")
+    assert v["P_rel_err"] == pytest.approx(0.5 / 20.0)
+    # law T^-1/2: 0.5 % -> 0.1 % needs 25 times as long
+    assert v["time_to_target"] == pytest.approx(100.0)
+    assert judge(t, dict(values), "too_noisy", "x", 4.0) == ("too_noisy", "x")
+    status, _ = judge(ErrorTarget(D=0.01), dict(values), "ok", "", 4.0)
+    assert status == "ok"
+
+
+def test_error_exponent_finds_the_law_and_holds_its_range():
+    T = np.array([1.0, 2.0, 4.0, 8.0])
+    assert error_exponent(T, 0.1 * T**-0.5) == pytest.approx(-0.5)
+    assert error_exponent(T, 0.1 * T**-1.0) == pytest.approx(-1.0)
+    assert error_exponent(T, 0.1 * T**-3.0) == -1.0  # steeper than a bounded signal: held
+    assert error_exponent(T, 0.1 * T**0.5) == -0.5  # errors growing: the slow law
+    assert error_exponent([1.0], [0.1]) == K_DEFAULT
+    assert time_to_target(2.0, 0.01, 0.005, -1.0) == pytest.approx(4.0)
+    assert time_to_target(2.0, 0.004, 0.005, -0.5) == 2.0
+
+
+QUICK = Path(__file__).resolve().parents[2] / "config" / "quick.yaml"
+
+
+def _cfg(**top) -> dict:
+    cfg = yaml.safe_load(QUICK.read_text())
+    cfg.update(top)
+    return cfg
+
+
+def _scene(cfg: dict) -> dict:
+    return next(iter(validate_config(cfg)["scenes"].values()))
+
+
+@pytest.mark.parametrize(
+    ("target", "words"),
+    [
+        ({"D": 0.0}, "target.D = 0.0: out of range; allowed range (0.0, 1.0]"),
+        ({"P": -0.1}, "target.P = -0.1: out of range; allowed range (0.0, 1.0]"),
+        ({"D": 1.5}, "target.D = 1.5: out of range; allowed range (0.0, 1.0]"),
+        ({"cpu_s": 10.0}, "target = {'cpu_s': 10.0}: asks for no error; give D or P"),
+        ({"D": 0.01, "cpu_s": 0.01}, "target.cpu_s = 0.01: below one control window"),
+        ({"D": 0.01, "dt": 1}, "unknown key(s) ['dt']"),
+    ],
+)
+def test_a_bad_target_is_refused_naming_key_and_range(target, words):
+    with pytest.raises(ConfigError, match=None) as exc:
+        _scene(_cfg(target=target))
+    assert words in str(exc.value), str(exc.value)
+
+
+def test_a_budget_is_checked_only_where_a_window_runs():
+    """A piston-only scene holds no control window: a small budget is its own business."""
+    sc = _scene(_cfg(target={"D": 0.01, "cpu_s": 0.01}, schemes=["piston"]))
+    assert sc["target"]["cpu_s"] == 0.01
+
+
+def test_scenes_inherit_the_top_level_target_and_the_tolerance_follows_it():
+    """A scene without its own target takes the top level's; shock.residual_tol becomes
+    TOL_PER_TARGET times the larger error asked, unless the scene gives it; a scene's own
+    target wins over the top level's."""
+    sc = _scene(_cfg(target={"D": 0.002, "P": 0.004}))
+    assert sc["target"] == {"D": 0.002, "P": 0.004}
+    assert sc["shock"]["residual_tol"] == pytest.approx(TOL_PER_TARGET * 0.004)
+    loose = _scene(_cfg(target={"D": 0.5}))
+    assert loose["shock"]["residual_tol"] == 1.0  # held in its range
+    cfg = _cfg(target={"D": 0.002})
+    own = copy.deepcopy(cfg)
+    name = next(iter(own["scenes"]))
+    own["scenes"][name]["shock"]["residual_tol"] = 0.02
+    own["scenes"][name]["target"] = {"P": 0.01}
+    sc = _scene(own)
+    assert sc["target"] == {"P": 0.01} and sc["shock"]["residual_tol"] == 0.02
+    assert _scene(_cfg())["shock"]["residual_tol"] == 0.01  # no target: the schema's
