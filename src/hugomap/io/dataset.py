@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 
 from .. import __version__
-from ..failures import FAILURES
+from ..failures import FAILURES, MEASURED
 from ..keys import config_hash
 
 log = logging.getLogger("hugomap")
@@ -256,7 +256,7 @@ REFERENCES = (
     "method and its control schemes)"
 )
 #: ``status_flag`` codes: index into this tuple (a status not listed is ``unregistered``).
-STATUS_FLAGS: tuple[str, ...] = ("ok", "not_converged", *FAILURES, "unregistered")
+STATUS_FLAGS: tuple[str, ...] = (*MEASURED, *FAILURES, "unregistered")
 CONVERGED_FLAGS = {"flag_values": np.array([0, 1], np.int8),
                    "flag_meanings": "not_converged converged"}  # fmt: skip
 
@@ -451,6 +451,21 @@ def control_vars(history, units: UnitTable) -> dict:
     out["omega_t"] = ("omega_sample", a["samples_t"], {"units": time_unit, "long_name": "time"})
     out["omega_value"] = ("omega_sample", a["samples_omega"], {"units": "1", "long_name": "omega"})
     return out
+
+
+def average_vars(h: dict[str, np.ndarray], units: UnitTable) -> dict:
+    """A window point's steady average chunk by chunk (``methods.steady.steady_state``'s
+    ``chunk_*``): its length, the relative errors of D and P it stated then, and the point's
+    CPU so far (loading and window set-up counted), along ``chunk``: the point's error
+    against its cost, the data of the CPU a target costs."""
+    names = {
+        "chunk_T": (units.axes["time"], "length of the steady average at the end of chunk k"),
+        "chunk_D_rel_err": ("1", "D_err / D stated over the average up to chunk k"),
+        "chunk_P_rel_err": ("1", "P_err / |P - P0| stated over the average up to chunk k"),
+        "chunk_cpu_s": ("s", "CPU time of the point up to chunk k, its loading counted"),
+    }
+    return {k: ("chunk", np.asarray(h[k], dtype=float), {"units": u, "long_name": ln})
+            for k, (u, ln) in names.items() if k in h}  # fmt: skip
 
 
 def profile_vars(profile: dict[str, np.ndarray], units: UnitTable) -> dict:

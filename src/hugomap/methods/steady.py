@@ -60,7 +60,9 @@ def steady_state(
 ) -> tuple[dict, dict[str, np.ndarray]]:
     """Average the steady wave for ``duration`` (module docstring); returns the point's
     values and the samples (t, front, x_left, x_right, sums, stage, omega, and the slab
-    behind's u relative to the upstream and P_xx: u_slab, P_slab). The slabs are
+    behind's u relative to the upstream and P_xx: u_slab, P_slab), and per chunk of the
+    average its length, stated relative errors and the point's CPU so far (chunk_T,
+    chunk_D_rel_err, chunk_P_rel_err, chunk_cpu_s: NaN without ``cpu``). The slabs are
     ``analysis.shock.measure_point``'s (``gap``, ``avg_length``, ``left_gap`` from the
     outflow edge, ``ahead_gap`` ahead of the front).
 
@@ -95,7 +97,7 @@ def steady_state(
     front: list[float] = []
     sums_all: list[np.ndarray] = []
     omega: list[float] = []
-    law: dict[str, list[float]] = {"T": [], "D": [], "P": []}
+    law: dict[str, list[float]] = {"T": [], "D": [], "P": [], "cpu": []}
     budget_spent = False
     while True:
         c0 = cpu() if cpu is not None else 0.0
@@ -109,17 +111,19 @@ def steady_state(
         r, h = _measure(win, profile, pole, signal, t, front, sums_all, omega, gap, avg_length,
                         residual_tol, left_gap, ahead_gap)  # fmt: skip
         rel = ErrorTarget.relative_errors(r, pole.P0)
-        for k, v in (("T", len(t) * step), ("D", rel["D"]), ("P", rel["P"])):
+        spent = cpu() if cpu is not None else np.nan
+        for k, v in (("T", len(t) * step), ("D", rel["D"]), ("P", rel["P"]), ("cpu", spent)):
             law[k].append(v)
         missed = target is not None and bool(target.missed(r, pole.P0))
         if len(t) >= n_max or not (unresolved(r, residual_tol) or missed):
             break
         if target is not None and target.cpu_s is not None and cpu is not None:
-            spent = cpu()
             if spent + (spent - c0) > target.cpu_s:  # the next chunk would overrun it
                 budget_spent = True
                 break
     r["average_time"] = float(len(t) * step)
+    for k, name in (("T", "T"), ("D", "D_rel_err"), ("P", "P_rel_err"), ("cpu", "cpu_s")):
+        h["chunk_" + name] = np.asarray(law[k], dtype=float)
     _relaxation_zone(r, h, profile, pole, g.x_lo, gap, avg_length, residual_tol, left_gap)
     laws = {q: error_exponent(law["T"], law[q]) for q in ("D", "P")}
     r["status"], r["diagnostic"] = judge(

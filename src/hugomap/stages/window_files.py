@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 
 from ..failures import StageFailed
-from ..io.dataset import control_vars, profile_vars
+from ..io.dataset import average_vars, control_vars, profile_vars
 from ..methods.control import ControlHistory, OmegaSignal
 from ..methods.steady import mean_profile
 from ..states import Pole
@@ -38,6 +38,7 @@ def window_point(
     more = dict(extra or {})
     if h is not None and profile is not None:
         more.update(profile_vars(mean_profile(h, profile), b.units))
+        more.update(average_vars(h, b.units))
     if control is not None and control.t:
         more.update(control_vars(control, b.units))
     hist = (
