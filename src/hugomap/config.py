@@ -29,7 +29,7 @@ from typing import Any
 import jsonschema
 import yaml
 
-from . import campaign_expand, registry
+from . import campaign_expand, cost_laws, registry
 from .keys import MAX_INT_BITS, config_hash, key_path, point_tag
 from .keys import show as _show
 
@@ -188,8 +188,13 @@ def load_schema(path: str | Path | None = None) -> dict:
     }
     for name in reversed(list(registry.REGISTRY)):
         defs[f"{name}_scene"] = registry.scene_schema(name)
-        # the error target is every solver's: one definition, in the top-level schema
-        defs[f"{name}_scene"]["properties"]["target"] = {"$ref": "#/$defs/target"}
+        # the error target is every solver's: one definition, in the top-level schema; so is
+        # auto, the scheme chosen from measured costs (refused where a solver has none)
+        props = defs[f"{name}_scene"]["properties"]
+        props["target"] = {"$ref": "#/$defs/target"}
+        enum = props.get("schemes", {}).get("items", {}).get("enum")
+        if isinstance(enum, list) and AUTO not in enum:
+            enum.append(AUTO)
         if name == registry.DEFAULT_SOLVER:
             continue
         branch = {
@@ -218,10 +223,12 @@ def _scene_checks(cfg: dict, own_tol: set) -> list[str]:
         solver.resolve_defaults(sc)
         problems += solver.check(f"scenes.{name}", sc, cfg)
         problems += _target(name, sc, cfg, name in own_tol)
+        problems += _auto_scheme(name, sc, cfg)
     return problems
 
 
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
+AUTO = "auto"
 # With an error target (methods.target), shock.residual_tol defaults to this many times the
 # larger relative error asked: a residual combines the errors of D, u_p, ρ, P and E, each
 # near the target, and ok asks |r| ≤ 3 of its errors, so a tight target is held to a tight
@@ -336,6 +343,31 @@ def _unshare(cfg: dict) -> None:
             cfg[k] = _tree_copy(cfg[k], (id(cfg),))
     except RecursionError:  # nesting too deep to copy: validated as it is
         pass
+
+
+def _auto_scheme(name: str, sc: dict, cfg: dict) -> list[str]:
+    """``auto`` in the scene's schemes (its own or the top level's) becomes the scheme of
+    least CPU for its ``target.D`` by the measured cost laws (``cost_laws.choose``); the
+    scene then lists its schemes itself and says why in ``scheme_choice``. Refused: auto
+    without a ``target.D``, or for a solver the cost data has no laws for."""
+    schemes = list(sc.get("schemes", cfg.get("schemes", ["piston"])))
+    if AUTO not in schemes:
+        return []
+    at = key_path(("scenes", name, "schemes"))
+    solver = registry.solver_of(sc)
+    have = cost_laws.solvers_with_laws()
+    if solver not in have:
+        return [f"{at} = {_show(schemes)}: auto needs measured cost laws, and the cost data "
+                f"({cost_laws.LAWS_FILE}) has none for solver {solver!r} (it has: "
+                f"{', '.join(have) or 'none'}); name the schemes instead"]  # fmt: skip
+    D = (sc.get("target") or {}).get("D")
+    if D is None:
+        return [f"{at} = {_show(schemes)}: auto chooses by the CPU to state D to "
+                f"scenes.{name}.target.D, which is not given; allowed range (0, 1]"]  # fmt: skip
+    chosen, why = cost_laws.choose(solver, float(D))
+    sc["schemes"] = list(dict.fromkeys(chosen if s == AUTO else s for s in schemes))
+    sc["scheme_choice"] = why
+    return []
 
 
 def _own_residual_tol(cfg: dict) -> set:

@@ -69,10 +69,12 @@ class PointStatus:
     log_age_s: float | None = None
     in_config: bool = True
     dichotomy: dict[str, Any] | None = None
+    accuracy: str = ""
 
 
 def _open_status(path: Path) -> tuple[str, str, dict[str, Any]]:
-    """``status``, ``diagnostic`` (variables, else attributes) and the attributes of a file."""
+    """``status``, ``diagnostic`` (variables, else attributes) and the attributes of a file
+    (with ``accuracy``, a point's: ``_accuracy``)."""
     with xr.open_dataset(path, engine="netcdf4", decode_times=False) as ds:
         out = []
         for key in ("status", "diagnostic"):
@@ -80,7 +82,22 @@ def _open_status(path: Path) -> tuple[str, str, dict[str, Any]]:
                 out.append(str(ds[key].values))
             else:
                 out.append(str(ds.attrs.get(key, "")))
-        return out[0], out[1], dict(ds.attrs)
+        return out[0], out[1], {**ds.attrs, "accuracy": _accuracy(ds)}
+
+
+def _accuracy(ds: xr.Dataset) -> str:
+    """The accuracy a point bought: 'D ± 0.31 %, P ± 0.52 % (target D 1 %, P 2 %)' from its
+    stated errors (D_err/D, P_err/|P − P0|); empty for a file without them."""
+
+    def num(k: str) -> float:
+        return float(ds[k].values) if k in ds.variables and ds[k].ndim == 0 else math.nan
+
+    D, P, P0 = num("D"), num("P"), num("P0")
+    rel = {"D": num("D_err") / abs(D) if D else math.nan,
+           "P": num("P_err") / abs(P - (P0 if math.isfinite(P0) else 0.0))}  # fmt: skip
+    got = [f"{q} ± {100 * v:.2g} %" for q, v in rel.items() if math.isfinite(v)]
+    want = [f"{q} {100 * num('target_' + q):g} %" for q in rel if math.isfinite(num("target_" + q))]
+    return ", ".join(got) + (f" (target {', '.join(want)})" if got and want else "")
 
 
 DICHOTOMY_KEYS = {"k", "bracket", "pending", "done", "status"}
@@ -125,7 +142,8 @@ def _final(final: Path, p: PointStatus) -> bool:
     if not final.exists():
         return False
     try:
-        p.status, p.diagnostic, _ = _open_status(final)
+        p.status, p.diagnostic, attrs = _open_status(final)
+        p.accuracy = str(attrs.get("accuracy", ""))
     except Exception as exc:  # any unreadable file is reported, not raised
         p.state, p.diagnostic = "failed", f"unreadable {final.name}: {exc}"
         return True
@@ -525,6 +543,8 @@ def _detail(p: dict[str, Any]) -> str:
         detail = f"window ready; {p['scheme']} run not started"
     else:
         detail = p["diagnostic"]
+    if p["state"] in DONE_STATES and p.get("accuracy"):
+        detail = "; ".join(x for x in (p["accuracy"], detail) if x)
     if p.get("dichotomy") and p["state"] != "running":
         detail = "; ".join(x for x in (detail, _dichotomy_text(p["dichotomy"])) if x)
     if not p["in_config"]:

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import yaml
 
+from hugomap import cost_laws
 from hugomap.config import TOL_PER_TARGET, ConfigError, validate_config
 from hugomap.methods.steady import steady_state
 from hugomap.methods.target import (
@@ -186,3 +187,44 @@ def test_scenes_inherit_the_top_level_target_and_the_tolerance_follows_it():
     sc = _scene(own)
     assert sc["target"] == {"P": 0.01} and sc["shock"]["residual_tol"] == 0.02
     assert _scene(_cfg())["shock"]["residual_tol"] == 0.01  # no target: the schema's
+
+
+# -- schemes: [auto] -------------------------------------------------------------------------
+
+LAWS = {
+    "machine": "test", "date": "2026-12-07",
+    "solvers": {"md": {"piston": {"c": 1e-3, "m": -2.0, "targets": [0.001, 0.01]},
+                       "amw": {"c": 1.0, "m": -1.0, "targets": [0.001, 0.01]}}},
+}  # fmt: skip
+
+
+def test_auto_takes_the_cheaper_law_at_the_target():
+    """cpu = c t^m: the piston's t^-2 against the window's t^-1 cross at t = 0.1 %; looser
+    targets go to the piston, tighter ones to AMW, and the reason quotes both costs."""
+    assert cost_laws.choose("md", 0.005, LAWS)[0] == "piston"
+    scheme, why = cost_laws.choose("md", 0.0005, LAWS)
+    assert scheme == "amw"
+    assert "amw, 2e+03 s a point against piston 4e+03 s" in why
+    assert "extrapolated" in why  # 0.05 % lies outside the measured 0.1-1 %
+    with pytest.raises(KeyError):
+        cost_laws.choose("csph", 0.01, LAWS)
+
+
+def test_auto_is_resolved_before_any_job(monkeypatch):
+    """The scene lists the chosen scheme itself and says why; auto without target.D, or for
+    a solver the cost data has no laws for, is refused naming the key."""
+    monkeypatch.setattr(cost_laws, "load", lambda: LAWS)
+    sc = _scene(_cfg(schemes=["auto"], target={"D": 0.005}))
+    assert sc["schemes"] == ["piston"] and sc["scheme_choice"].startswith("auto: piston")
+    sc = _scene(_cfg(schemes=["auto", "amw"], target={"D": 0.0005}))
+    assert sc["schemes"] == ["amw"]
+    with pytest.raises(ConfigError) as exc:
+        _scene(_cfg(schemes=["auto"], target={"P": 0.005}))
+    assert "scenes.lj_quick.schemes = ['auto']: auto chooses by the CPU to state D" in str(
+        exc.value
+    )
+    monkeypatch.setattr(cost_laws, "load", lambda: {"solvers": {}})
+    with pytest.raises(ConfigError) as exc:
+        _scene(_cfg(schemes=["auto"], target={"D": 0.005}))
+    assert "auto needs measured cost laws" in str(exc.value)
+    assert "none for solver 'md'" in str(exc.value)

@@ -120,14 +120,16 @@ def test_the_graph_sees_function_level_imports() -> None:
 def test_config_imports_nothing_above_it() -> None:
     """What validation loads (it runs when Snakemake parses the workflow) reaches neither
     the campaign's dataset nor status, io or any solver module: only the registry, which
-    names the backends' scene-config modules by string and imports them when asked."""
+    names the backends' scene-config modules by string and imports them when asked, and the
+    cost laws (a JSON reader) that ``schemes: [auto]`` is resolved from."""
     graph = import_graph()
     reach, todo = set(), ["hugomap.config"]
     while todo:
         for w in graph[todo.pop()] - reach:
             reach.add(w)
             todo.append(w)
-    assert reach == {"hugomap", "hugomap.campaign_expand", "hugomap.keys", "hugomap.registry"}
+    assert reach == {"hugomap", "hugomap.campaign_expand", "hugomap.cost_laws", "hugomap.keys",
+                     "hugomap.registry"}  # fmt: skip
 
 
 def test_particle_backends_stand_side_by_side() -> None:

@@ -530,3 +530,21 @@ def test_detail_fits_the_terminal_and_is_whole_elsewhere(
     monkeypatch.setattr("sys.stdout", _Terminal())
     assert main(["status", "--results", str(res)]) == 0
     assert len(row(sys.stdout.getvalue())) == 80
+
+
+def test_a_done_point_shows_the_accuracy_it_bought(tmp_path: Path) -> None:
+    """A point's row gives its stated relative errors and the target it was asked for, and a
+    point that missed its target is counted as such, not as failed."""
+    sc = tmp_path / "tiny"
+    values = {"piston_velocity": 0.5, "D": 4.0, "D_err": 0.012, "P": 10.0, "P_err": 0.2,
+              "target_D": 0.002, "target_P": 0.01}  # fmt: skip
+    ds = point_dataset(values, {"rho0": 0.8, "P0": 0.0}, None, "piston", "tiny",
+                       "target_not_reached", "D's error 0.3 % above target.D = 0.2 %", {},
+                       lj_units())  # fmt: skip
+    write_netcdf(ds, sc / "up0.5" / "piston.nc")
+    report = sweep_status(tmp_path, _config(), now=NOW)
+    text = format_table(report)
+    row = next(ln for ln in text.splitlines() if ln.split()[:2] == ["0.5", "piston"])
+    assert row.split()[2] == "target_not_reached"
+    assert "D ± 0.3 %, P ± 2 % (target D 0.2 %, P 1 %); D's error 0.3 %" in row
+    assert "1 done (0 ok, 1 target not reached, 0 not converged)" in text

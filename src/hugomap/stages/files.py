@@ -112,6 +112,8 @@ def write_point(
                        scene, backend.units)  # fmt: skip
     if extra:
         ds = ds.assign(extra)
+    if scene.get("scheme_choice"):  # schemes: [auto] (config): which scheme and why
+        ds.attrs["scheme_choice"] = str(scene["scheme_choice"])
     ds.attrs.update(attrs or {})
     return write_netcdf(ds, out)
 
