@@ -46,8 +46,9 @@ def choose(solver: str, target_D: float, data: dict | None = None) -> tuple[str,
         raise KeyError(solver)
     cost = {s: float(law["c"]) * target_D ** float(law["m"]) for s, law in laws.items()}
     best = min(cost, key=lambda s: cost[s])
-    lo, hi = (min(law["targets"]) for law in laws.values()), (
-        max(law["targets"]) for law in laws.values()
+    lo, hi = (
+        (min(law["targets"]) for law in laws.values()),
+        (max(law["targets"]) for law in laws.values()),
     )
     inside = max(lo) <= target_D <= min(hi)
     others = ", ".join(f"{s} {cost[s]:.3g} s" for s in sorted(cost) if s != best)
