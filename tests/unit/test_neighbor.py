@@ -146,3 +146,102 @@ def test_simulation_list_always_covers_rc(periodic_x):
         # and the list is the exact rlist list at the positions where it was built
         assert ref.pair_set(s.x_ref, s.L, s.periodic, sim.lj.rlist) == listed
     assert sim.list_builds > 2
+
+
+# Boxes whose periodic dimensions have ≥ 5 cells: the half list comes straight from the half
+# stencil (``build_half_list``); bounded dimensions may have any number of cells.
+HALF_BOXES = {
+    "periodic-5x6x6": ((7.1, 8.5, 9.0), (True, True, True)),
+    "periodic-8x5x7": ((11.5, 7.2, 10.0), (True, True, True)),
+    "walled-x-2cells": ((4.0, 8.5, 9.0), (False, True, True)),
+    "walled-x-and-z": ((9.0, 7.5, 3.0), (False, True, False)),
+    "walled-all": ((5.0, 4.0, 8.0), (False, False, False)),
+}
+
+
+def _half_direct(xs, L, periodic, ids=None, rowless=0, maxnb=None):
+    from hugomap.md.neighbor import build_half_list
+
+    nc = grid_shape(L, RLIST)
+    start = counting_sort(cell_of(xs, L, nc), int(np.prod(nc)))[1]
+    n = len(xs)
+    half = np.full((n, n if maxnb is None else maxnb), -1, dtype=np.int32)
+    nhalf = np.zeros(n, dtype=np.int32)
+    ids = np.arange(n, dtype=np.int64) if ids is None else ids
+    need = build_half_list(xs, ids, L, periodic, nc, start, RLIST**2, rowless, half, nhalf)
+    return half, nhalf, int(need)
+
+
+@pytest.mark.parametrize("box", list(HALF_BOXES))
+def test_half_stencil_list_is_each_pair_within_rlist_once(box):
+    from hugomap.md.neighbor import half_stencil_ok
+
+    L, periodic = HALF_BOXES[box]
+    x, L = _gas(L)
+    periodic = np.array(periodic)
+    nc = grid_shape(L, RLIST)
+    assert half_stencil_ok(nc, periodic)
+    xs, _, _, _, _ = ref.sorted_lists(x, L, periodic, nc, RLIST)
+    half, nhalf, need = _half_direct(xs, L, periodic)
+    unordered = Counter(
+        (min(i, int(j)), max(i, int(j))) for i in range(len(xs)) for j in half[i, : nhalf[i]]
+    )
+    assert all(i != j for i, j in unordered)
+    assert max(unordered.values()) == 1  # each pair once: never from both ends
+    assert set(unordered) == ref.pair_set(xs, L, periodic, RLIST)
+    assert need == nhalf.max()
+
+
+def test_half_stencil_refuses_short_periodic_dimensions():
+    from hugomap.md.neighbor import half_stencil_ok
+
+    assert not half_stencil_ok(np.array([4, 6, 6]), np.array([True, True, True]))
+    assert half_stencil_ok(np.array([4, 6, 6]), np.array([False, True, True]))
+    assert half_stencil_ok(np.array([1, 1, 1]), np.array([False, False, False]))
+
+
+def test_half_stencil_short_rows_are_cut_and_report_the_need():
+    L, periodic = HALF_BOXES["periodic-5x6x6"]
+    x, L = _gas(L)
+    periodic = np.array(periodic)
+    xs, _, _, _, _ = ref.sorted_lists(x, L, periodic, grid_shape(L, RLIST), RLIST)
+    full, nfull, need = _half_direct(xs, L, periodic)
+    cut, ncut, need_cut = _half_direct(xs, L, periodic, maxnb=5)
+    assert need_cut == need > 5
+    assert np.array_equal(ncut, np.minimum(nfull, 5))
+    for i in range(len(xs)):  # the rows are cut, not changed
+        assert np.array_equal(cut[i, : ncut[i]], full[i, : ncut[i]])
+
+
+@pytest.mark.parametrize("direct", [True, False], ids=["half-stencil", "from-full"])
+def test_half_list_leaves_out_only_the_pairs_inside_the_inflow_copy(direct):
+    """With ``rowless`` the pairs of two copy atoms (ids −1 … −rowless) are dropped, and
+    nothing else: every row keeps its other entries in their order (the mobile atoms'
+    forces are then summed in the same order, bit for bit)."""
+    from hugomap.md.neighbor import half_from_full_rowless
+
+    L, periodic = HALF_BOXES["periodic-5x6x6"] if direct else ((6.0, 6.0, 6.0), (True,) * 3)
+    x, L = _gas(L)
+    periodic = np.array(periodic)
+    xs, _, nbr, nnb, _ = ref.sorted_lists(x, L, periodic, grid_shape(L, RLIST), RLIST)
+    n = len(xs)
+    copy = xs[:, 0] > 0.5 * L[0]
+    ids = np.where(copy, -1 - np.cumsum(copy) + 1, np.arange(n)).astype(np.int64)
+    ids[copy & (xs[:, 1] > 0.8 * L[1])] = -n - 5  # frozen, but not of the copy: kept
+    rowless = int(copy.sum())
+    if direct:
+        h0, n0, _ = _half_direct(xs, L, periodic)
+        h1, n1, _ = _half_direct(xs, L, periodic, ids, rowless)
+    else:
+        h0, h1 = np.zeros((n, n), np.int32), np.zeros((n, n), np.int32)
+        n0, n1 = np.zeros(n, np.int32), np.zeros(n, np.int32)
+        half_from_full_rowless(nbr, nnb, ids, 0, h0, n0)
+        half_from_full_rowless(nbr, nnb, ids, rowless, h1, n1)
+    in_copy = (ids < 0) & (ids >= -rowless)
+    assert in_copy.sum() > 10 and (ids < -rowless).any()
+    dropped = 0
+    for i in range(n):
+        kept = [int(j) for j in h0[i, : n0[i]] if not (in_copy[i] and in_copy[j])]
+        dropped += n0[i] - len(kept)
+        assert list(h1[i, : n1[i]]) == kept
+    assert dropped > 0

@@ -22,6 +22,7 @@ from ..numba_conf import njit, pjit, prange
 from .potential import lj_pair
 
 VIRIAL_COMPONENTS = ("xx", "yy", "zz", "xy", "xz", "yz")
+PAD = 8  # half-list scratch rows are padded to a multiple of this (``_half_rows``)
 
 
 @pjit
@@ -72,19 +73,27 @@ def forces_full(
 
 
 @njit
-def forces_half(
+def _half_rows(
     x: np.ndarray,
     L: np.ndarray,
     periodic: np.ndarray,
     half: np.ndarray,
     nhalf: np.ndarray,
     rc2: float,
-    f: np.ndarray,
+    lo: int,
+    hi: int,
+    out: np.ndarray,
 ) -> None:
-    """F_i from the half list with Newton's third law, serial (the one-thread fast path).
+    """Zero ``out``, then add the pair forces of half-list rows lo:hi (F_ij on i, −F_ij on
+    j; j may be any atom: the half stencil's rows reach across the periodic seams).
 
     Per row, three loops: gather x_j into contiguous scratch, compute the pair forces there
     (a loop with no indirect access, which LLVM vectorises), then scatter −F_ij onto the j.
+    (One loop that gathers, computes and scatters is not vectorised and is about twice as
+    slow; a branch on r² < rc² instead of the select is slower still: it is mispredicted.)
+    The scratch row is padded to a multiple of ``PAD`` with phantom partners beyond rc (zero
+    force, by the select), so that the vector loop has no scalar remainder: 15 % faster
+    on bench/in.lj rows (~38 pairs).
     """
     n = x.shape[0]
     Lp0 = L[0] if periodic[0] else 0.0
@@ -94,11 +103,19 @@ def forces_half(
     iL1 = 1.0 / L[1]
     iL2 = 1.0 / L[2]
     w = half.shape[1]
-    bx = np.empty(w)
-    by = np.empty(w)
-    bz = np.empty(w)
-    f[:, :] = 0.0
+    bx = np.empty(w + PAD)
+    by = np.empty(w + PAD)
+    bz = np.empty(w + PAD)
+    # The phantom sits half a box away in each periodic dimension (the minimum image leaves
+    # it there; L ≥ 2 rlist there, so r ≥ rc) and far away in the others.
+    ox = 0.5 * L[0] if periodic[0] else 1.0e3
+    oy = 0.5 * L[1] if periodic[1] else 1.0e3
+    oz = 0.5 * L[2] if periodic[2] else 1.0e3
     for i in range(n):
+        out[i, 0] = 0.0
+        out[i, 1] = 0.0
+        out[i, 2] = 0.0
+    for i in range(lo, hi):
         xi = x[i, 0]
         yi = x[i, 1]
         zi = x[i, 2]
@@ -108,10 +125,15 @@ def forces_half(
             bx[m] = x[j, 0]
             by[m] = x[j, 1]
             bz[m] = x[j, 2]
+        kp = (k + PAD - 1) // PAD * PAD
+        for m in range(k, kp):
+            bx[m] = xi + ox
+            by[m] = yi + oy
+            bz[m] = zi + oz
         fx = 0.0
         fy = 0.0
         fz = 0.0
-        for m in range(k):
+        for m in range(kp):
             dx = xi - bx[m]
             dy = yi - by[m]
             dz = zi - bz[m]
@@ -131,12 +153,115 @@ def forces_half(
             fz += gz
         for m in range(k):
             j = half[i, m]
-            f[j, 0] -= bx[m]
-            f[j, 1] -= by[m]
-            f[j, 2] -= bz[m]
-        f[i, 0] += fx
-        f[i, 1] += fy
-        f[i, 2] += fz
+            out[j, 0] -= bx[m]
+            out[j, 1] -= by[m]
+            out[j, 2] -= bz[m]
+        out[i, 0] += fx
+        out[i, 1] += fy
+        out[i, 2] += fz
+
+
+@njit
+def forces_half(
+    x: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+    rc2: float,
+    f: np.ndarray,
+) -> None:
+    """F_i from the half list with Newton's third law, serial (each pair computed once)."""
+    _half_rows(x, L, periodic, half, nhalf, rc2, 0, x.shape[0], f)
+
+
+@pjit
+def forces_half_threads(
+    x: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+    rc2: float,
+    f: np.ndarray,
+    fbuf: np.ndarray,
+) -> None:
+    """F_i from the half list with Newton's third law on ``fbuf.shape[0] + 1`` threads.
+
+    The rows are cut into as many equal, contiguous chunks; chunk 0 accumulates into ``f``,
+    chunk t > 0 into its own buffer ``fbuf[t − 1]``, and the buffers are then added to ``f``
+    in chunk order. The result depends on the number of chunks (fixed by
+    ``fbuf``), never on the scheduling, so a run is bit-for-bit reproducible at a given
+    thread count.
+    """
+    n = x.shape[0]
+    nt = fbuf.shape[0] + 1
+    for t in prange(nt):
+        lo = t * n // nt
+        hi = (t + 1) * n // nt
+        if t == 0:
+            _half_rows(x, L, periodic, half, nhalf, rc2, lo, hi, f)
+        else:
+            _half_rows(x, L, periodic, half, nhalf, rc2, lo, hi, fbuf[t - 1])
+    for i in prange(n):
+        for t in range(nt - 1):
+            f[i, 0] += fbuf[t, i, 0]
+            f[i, 1] += fbuf[t, i, 1]
+            f[i, 2] += fbuf[t, i, 2]
+
+
+@njit
+def energy_virial_half(
+    x: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+    rc2: float,
+    ushift: float,
+    pe: np.ndarray,
+    vir: np.ndarray,
+) -> None:
+    """As ``energy_virial_full`` from the half list: each pair gives ½ U(r_ij) to pe_i and
+    pe_j and ½ r_ij^a F_ij^b to W_i and W_j (the product is even in r_ij), serially."""
+    n = x.shape[0]
+    Lp0 = L[0] if periodic[0] else 0.0
+    Lp1 = L[1] if periodic[1] else 0.0
+    Lp2 = L[2] if periodic[2] else 0.0
+    pe[:] = 0.0
+    vir[:, :] = 0.0
+    for i in range(n):
+        for m in range(nhalf[i]):
+            j = half[i, m]
+            dx = x[i, 0] - x[j, 0]
+            dy = x[i, 1] - x[j, 1]
+            dz = x[i, 2] - x[j, 2]
+            dx -= Lp0 * np.rint(dx / L[0])
+            dy -= Lp1 * np.rint(dy / L[1])
+            dz -= Lp2 * np.rint(dz / L[2])
+            u, fr = lj_pair(dx * dx + dy * dy + dz * dz, rc2, ushift)
+            u *= 0.5
+            fr *= 0.5
+            w0 = fr * dx * dx
+            w1 = fr * dy * dy
+            w2 = fr * dz * dz
+            w3 = fr * dx * dy
+            w4 = fr * dx * dz
+            w5 = fr * dy * dz
+            pe[i] += u
+            pe[j] += u
+            vir[i, 0] += w0
+            vir[i, 1] += w1
+            vir[i, 2] += w2
+            vir[i, 3] += w3
+            vir[i, 4] += w4
+            vir[i, 5] += w5
+            vir[j, 0] += w0
+            vir[j, 1] += w1
+            vir[j, 2] += w2
+            vir[j, 3] += w3
+            vir[j, 4] += w4
+            vir[j, 5] += w5
 
 
 @pjit

@@ -26,8 +26,15 @@ from __future__ import annotations
 import numpy as np
 
 from ..numba_conf import njit, pjit, prange
-from .forces import forces_full, forces_half
-from .neighbor import build_full_list, cell_of, counting_sort, half_from_full
+from .forces import forces_full, forces_half, forces_half_threads
+from .neighbor import (
+    build_full_list,
+    build_half_list,
+    cell_of,
+    counting_sort,
+    half_from_full_rowless,
+    half_stencil_ok,
+)
 
 OK, GROW, NAN, CFL, LOST = 0, 1, 2, 3, 4
 STATUS_NAMES = {OK: "ok", GROW: "grow", NAN: "nan", CFL: "cfl", LOST: "atom_lost"}
@@ -121,6 +128,45 @@ def sort_by_cell(
 
 
 @njit
+def build_lists(
+    x: np.ndarray,
+    ids: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    nc: np.ndarray,
+    start: np.ndarray,
+    rlist2: float,
+    nbr: np.ndarray,
+    nnb: np.ndarray,
+    use_half: bool,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+    rowless: int,
+) -> int:
+    """Build the list the forces use from positions sorted by cell; return the row need
+    (rows were cut if it exceeds the list width, ``list_width``).
+
+    Half list: straight from the half stencil (``build_half_list``) where the grid allows
+    it, else from the full list (``half_from_full_rowless``; a periodic dimension of fewer
+    than 5 cells). Full list: ``build_full_list``, the rows of the window's inflow copy
+    emptied (``drop_rows``). In both the full rows of that copy end empty."""
+    if use_half and half_stencil_ok(nc, periodic):
+        return build_half_list(x, ids, L, periodic, nc, start, rlist2, rowless, half, nhalf)
+    need = build_full_list(x, L, periodic, nc, start, rlist2, nbr, nnb)
+    if need <= nbr.shape[1]:
+        if use_half:
+            half_from_full_rowless(nbr, nnb, ids, rowless, half, nhalf)
+        drop_rows(ids, nnb, rowless)
+    return need
+
+
+@njit
+def list_width(nbr: np.ndarray, half: np.ndarray) -> int:
+    """The row width of the list in use (the unused one is a 1 × 1 placeholder)."""
+    return max(nbr.shape[1], half.shape[1])
+
+
+@njit
 def rebuild(
     x: np.ndarray,
     v: np.ndarray,
@@ -138,18 +184,15 @@ def rebuild(
     nhalf: np.ndarray,
     rowless: int,
 ) -> int:
-    """Sort atoms by cell, build the list, remember x_ref; return the row need.
-    ``rowless``: frozen atoms with ids −1 … −rowless keep no row (``drop_rows``). (No
+    """Sort atoms by cell, build the list (``build_lists``), remember x_ref; return the row
+    need. ``rowless``: frozen atoms with ids −1 … −rowless keep no row (``drop_rows``). (No
     literal flag among the arguments: called with a constant True from jitted code and
     with a bool from Python, numba compiled and cached two overloads, and a process that
     loaded the second from the cache called a null pointer.)"""
     start = sort_by_cell(x, v, f, ids, L, nc)
-    need = build_full_list(x, L, periodic, nc, start, rlist2, nbr, nnb)
-    if need <= nbr.shape[1]:
-        if use_half:
-            half_from_full(nbr, nnb, half, nhalf)
-        else:
-            drop_rows(ids, nnb, rowless)
+    need = build_lists(
+        x, ids, L, periodic, nc, start, rlist2, nbr, nnb, use_half, half, nhalf, rowless
+    )
     x_ref[:] = x
     return need
 
@@ -158,8 +201,8 @@ def rebuild(
 def drop_rows(ids: np.ndarray, nnb: np.ndarray, rowless: int) -> None:
     """Empty the full-list rows of the frozen atoms with ids −1 … −``rowless`` (the window's
     inflow copy): nothing reads the force on them (frozen atoms are not kicked), while every
-    mobile row still lists them, so the mobile atoms' forces are unchanged bit for bit. Not
-    for the half list, whose pair (i, j) lives in one row only."""
+    mobile row still lists them, so the mobile atoms' forces are unchanged bit for bit. (The
+    half list leaves out the pairs of two such atoms instead: ``build_lists``.)"""
     if rowless <= 0:
         return
     for i in range(ids.shape[0]):
@@ -179,10 +222,24 @@ def compute_forces(
     nhalf: np.ndarray,
     rc2: float,
     f: np.ndarray,
+    fbuf: np.ndarray,
+    ids: np.ndarray,
+    rowless: int,
 ) -> None:
-    """Forces from the half list (one thread) or the full list (several)."""
+    """Forces from the half list (Newton's third law; on ``fbuf.shape[0] + 1`` threads) or
+    the full list (``prange`` rows). The window's inflow copy (ids −1 … −``rowless``) gets
+    zero force: nothing reads it, and the half list leaves out its inner pairs."""
     if use_half:
-        forces_half(x, L, periodic, half, nhalf, rc2, f)
+        if fbuf.shape[0] == 0:
+            forces_half(x, L, periodic, half, nhalf, rc2, f)
+        else:
+            forces_half_threads(x, L, periodic, half, nhalf, rc2, f, fbuf)
+        if rowless > 0:
+            for i in range(ids.shape[0]):
+                if -rowless <= ids[i] < 0:
+                    f[i, 0] = 0.0
+                    f[i, 1] = 0.0
+                    f[i, 2] = 0.0
     else:
         forces_full(x, L, periodic, nbr, nnb, rc2, f)
 
@@ -221,6 +278,7 @@ def run_steps(
     use_half: bool,
     half: np.ndarray,
     nhalf: np.ndarray,
+    fbuf: np.ndarray,
     impulse: np.ndarray,
     thermo: np.ndarray,
     r1: np.ndarray,
@@ -268,11 +326,11 @@ def run_steps(
             )  # fmt: skip
             counters[0] += 1
             ref[1] = 0.0
-            if need > nbr.shape[1]:
+            if need > list_width(nbr, half):
                 return s, GROW
         finish_step(
-            x, v, f, ids, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, dt, thermo, r1[s],
-            chi[s],
+            x, v, f, ids, L, periodic, nbr, nnb, use_half, half, nhalf, fbuf, rc2, dt, thermo,
+            r1[s], chi[s], rowless,
         )  # fmt: skip
     return nsteps, OK
 
@@ -290,14 +348,16 @@ def finish_step(
     use_half: bool,
     half: np.ndarray,
     nhalf: np.ndarray,
+    fbuf: np.ndarray,
     rc2: float,
     dt: float,
     thermo: np.ndarray,
     r1: float,
     chi: float,
+    rowless: int,
 ) -> None:
     """Second half of a step: F(x), v ← v + ½Δt F, then the thermostat if one is set."""
-    compute_forces(x, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, f)
+    compute_forces(x, L, periodic, nbr, nnb, use_half, half, nhalf, rc2, f, fbuf, ids, rowless)
     kick(v, f, ids, 0.5 * dt)
     if thermo[0] > 0.0:
         kin = 0.5 * np.sum(v * v)

@@ -264,3 +264,181 @@ def half_from_full(nbr: np.ndarray, nnb: np.ndarray, half: np.ndarray, nhalf: np
             half[i, k] = j
             k += j > i
         nhalf[i] = k
+
+
+@njit
+def half_from_full_rowless(
+    nbr: np.ndarray,
+    nnb: np.ndarray,
+    ids: np.ndarray,
+    rowless: int,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+) -> None:
+    """``half_from_full`` without the pairs of two frozen atoms with ids −1 … −``rowless``
+    (the window's inflow copy): the rows are those of ``half_from_full`` less those pairs,
+    so every other atom's force is unchanged bit for bit."""
+    n = nbr.shape[0]
+    w = half.shape[1]
+    for i in range(n):
+        if nnb[i] > w:
+            raise ValueError("half list narrower than a full neighbour row")
+        fi = -rowless <= ids[i] < 0
+        k = 0
+        for m in range(nnb[i]):
+            j = nbr[i, m]
+            half[i, k] = j
+            k += (j > i) & (not (fi and -rowless <= ids[j] < 0))
+        nhalf[i] = k
+
+
+@njit
+def half_stencil_ok(nc: np.ndarray, periodic: np.ndarray) -> bool:
+    """Whether ``build_half_list`` applies: every periodic dimension has at least
+    2 REACH + 1 cells, so that no two stencil cells are the same cell (no pair is met twice)."""
+    for d in range(3):
+        if periodic[d] and nc[d] < 2 * REACH + 1:
+            return False
+    return True
+
+
+@pjit
+def build_half_list(
+    x: np.ndarray,
+    ids: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    nc: np.ndarray,
+    start: np.ndarray,
+    rlist2: float,
+    rowless: int,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+) -> int:
+    """Fill ``half[i, :nhalf[i]]`` with each pair closer than √rlist2 once (Newton's third law),
+    from a half stencil of cells; atoms sorted by cell as for ``build_full_list``.
+
+    Cell c = (cx, cy, cz) pairs its atoms with the cells "after" it: dz ∈ {1, 2} (any dy, dx),
+    dz = 0 with dy ∈ {1, 2} (any dx), and along its own row of cells cx … cx + 2 the atoms
+    sorted after i (j > i in its own cell). Every unordered pair of cells within ±2 appears
+    exactly once that way, so each pair is listed once and no j ≤ i test is needed across
+    cells: about half the candidates of the full stencil. The own row goes first in the
+    candidate buffers, so that atom i's candidates are one contiguous tail of them. Needs
+    ``half_stencil_ok`` (periodic dimensions of ≥ 5 cells).
+
+    Pairs of two frozen atoms with ids −1 … −``rowless`` are left out (nothing reads the
+    force on them, ``integrate.drop_rows``); the rows of the other atoms are the same as
+    with ``rowless`` = 0, so the mobile atoms' forces are unchanged bit for bit.
+
+    Deterministic as ``build_full_list``: a cell's rows are written only by the thread that
+    owns the cell and their order depends only on the positions. Returns the largest row
+    length needed (> ``half.shape[1]``: rows were cut, grow and build again).
+    """
+    maxnb = half.shape[1]
+    nx = nc[0]
+    ny = nc[1]
+    nz = nc[2]
+    ncell = nx * ny * nz
+    px = periodic[0]
+    frozen = np.zeros(x.shape[0], dtype=np.bool_)
+    if rowless > 0:
+        for i in range(x.shape[0]):
+            frozen[i] = -rowless <= ids[i] < 0
+    fullest = 1
+    for c in range(ncell):
+        fullest = max(fullest, start[c + 1] - start[c])
+    # 12 runs of 5 cells (dz > 0, or dz = 0 and dy > 0) and the own run of 3 cells.
+    cap = (12 * (2 * REACH + 1) + REACH + 1) * fullest
+    block = 32
+    nblock = (ncell + block - 1) // block
+    need = 0
+    for blk in prange(nblock):
+        bx = np.empty(cap)
+        by = np.empty(cap)
+        bz = np.empty(cap)
+        bj = np.empty(cap, dtype=np.int32)
+        bf = np.empty(cap, dtype=np.bool_)
+        r2 = np.empty(cap)
+        rowbuf = np.empty(cap, dtype=np.int32)
+        for c in range(blk * block, min(ncell, (blk + 1) * block)):
+            if start[c + 1] == start[c]:
+                continue
+            cx = c % nx
+            cy = (c // nx) % ny
+            cz = c // (nx * ny)
+            # Gather the candidates run by run (written out here: as a function called per
+            # run, with its arrays' reference counting, the gather took twice as long).
+            ncand = 0
+            for run in range(13):
+                if run == 0:  # own row first: cells cx … cx + 2, from cell c's own atoms
+                    a, b, lo, hi = 0, 0, cx, cx + REACH
+                elif run <= REACH:  # dz = 0, dy = 1, 2
+                    a, b, lo, hi = 0, run, cx - REACH, cx + REACH
+                else:  # dz = 1, 2, dy = −2 … 2
+                    q = run - REACH - 1
+                    a = 1 + q // (2 * REACH + 1)
+                    b = q % (2 * REACH + 1) - REACH
+                    lo, hi = cx - REACH, cx + REACH
+                kz = cz + a
+                sz = 0.0
+                if kz >= nz:
+                    if not periodic[2]:
+                        continue
+                    kz -= nz
+                    sz = L[2]
+                ky = cy + b
+                sy = 0.0
+                if ky < 0 or ky >= ny:
+                    if not periodic[1]:
+                        continue
+                    sy = -L[1] if ky < 0 else L[1]
+                    ky += ny if ky < 0 else -ny
+                row = nx * (ky + ny * kz)
+                # The run's cells along x: one range of atoms, or two split at the periodic
+                # seam (the far one shifted by ±L_x); clipped at walls.
+                j0b, j1b, sxa, sxb = 0, 0, 0.0, 0.0
+                if px and lo < 0:
+                    j0a, j1a, sxa = start[row + lo + nx], start[row + nx], -L[0]
+                    j0b, j1b = start[row], start[row + hi + 1]
+                elif px and hi >= nx:
+                    j0a, j1a = start[row + lo], start[row + nx]
+                    j0b, j1b, sxb = start[row], start[row + hi - nx + 1], L[0]
+                else:
+                    j0a, j1a = start[row + max(lo, 0)], start[row + min(hi, nx - 1) + 1]
+                for seg in range(2):
+                    j0 = j0a if seg == 0 else j0b
+                    j1 = j1a if seg == 0 else j1b
+                    sx = sxa if seg == 0 else sxb
+                    for j in range(j0, j1):
+                        bx[ncand] = x[j, 0] + sx
+                        by[ncand] = x[j, 1] + sy
+                        bz[ncand] = x[j, 2] + sz
+                        bj[ncand] = j
+                        bf[ncand] = frozen[j]
+                        ncand += 1
+            for i in range(start[c], start[c + 1]):
+                xi = x[i, 0]
+                yi = x[i, 1]
+                zi = x[i, 2]
+                k0 = i - start[c] + 1  # the candidates after i
+                # All candidates, k < k0 too: a loop from 0 is vectorised better (measured).
+                for k in range(ncand):
+                    dx = xi - bx[k]
+                    dy = yi - by[k]
+                    dz = zi - bz[k]
+                    r2[k] = dx * dx + dy * dy + dz * dz
+                count = 0
+                if frozen[i]:
+                    for k in range(k0, ncand):
+                        rowbuf[count] = bj[k]
+                        count += (r2[k] < rlist2) & (not bf[k])
+                else:
+                    for k in range(k0, ncand):
+                        rowbuf[count] = bj[k]
+                        count += r2[k] < rlist2
+                m = min(count, maxnb)
+                for k in range(m):
+                    half[i, k] = rowbuf[k]
+                nhalf[i] = m
+                need = max(need, count)
+    return need

@@ -25,8 +25,8 @@ from ..numba_conf import num_threads
 from ..particles.bins import bin_sums
 from ..particles.profiles import SUM_FIELDS
 from . import integrate as ig
-from .forces import energy_virial_full
-from .neighbor import build_full_list, cell_of, counting_sort, grid_shape
+from .forces import energy_virial_full, energy_virial_half
+from .neighbor import cell_of, counting_sort, grid_shape
 from .potential import LJParams
 from .state import MDState
 
@@ -36,7 +36,8 @@ class MDSimulation:
 
     Parameters: ``state`` (MDState), ``lj`` (LJParams), ``dt`` [τ], optional thermostat
     temperature ``T_bath`` [ε/k_B] and time constant ``tau_bath`` [τ] (CSVR), ``seed``, and
-    ``use_half`` (Newton's third law on a half list instead of the full list; serial).
+    ``use_half`` (default True: Newton's third law on a half list, each pair computed once;
+    False: the full list, each pair computed from both ends, rows in ``prange``).
     """
 
     def __init__(
@@ -47,7 +48,7 @@ class MDSimulation:
         T_bath: float | None = None,
         tau_bath: float = 0.5,
         seed: int = 0,
-        use_half: bool = False,
+        use_half: bool = True,
     ):
         if not dt > 0:
             raise ValueError(f"dt = {dt}: must be > 0 tau")
@@ -58,8 +59,8 @@ class MDSimulation:
         self.T_bath = T_bath
         self.tau_bath = float(tau_bath)
         self.seed = int(seed)
-        # The full list is faster than the half list on one thread too (benchmarks/), and
-        # the half list doubles the list memory, so it is off unless asked for.
+        # The half list (built from a half stencil, Newton's third law) does half the pair
+        # work and half the list build of the full list (benchmarks/md_lj.py).
         self.use_half = bool(use_half)
         self.list_builds = 0
         self.rowless = 0  # frozen atoms with ids -1 ... -rowless have no force row
@@ -70,25 +71,46 @@ class MDSimulation:
                     f"2 (rc + skin) = {2 * lj.rlist:.4g} sigma: the minimum image fails"
                 )
         self.nc = grid_shape(state.L, lj.rlist)
-        density = state.n / float(np.prod(state.L))
-        est = 4.0 / 3.0 * math.pi * lj.rlist**3 * density
-        self._alloc_lists(int(est * 1.5) + 16)
+        self._alloc_lists(self._row_estimate())
         self._build_list(sort=True)
-        ig.compute_forces(*self._force_args(), self.state.f)
+        self._compute_forces()
 
     # -- neighbour lists -------------------------------------------------------------------
+    def _row_estimate(self) -> int:
+        """A first row width: the neighbours within rlist at the mean density, with room
+        (a half-stencil row holds about half of them: bench/in.lj 38 on average, 63 at most
+        of 77)."""
+        s = self.state
+        est = 4.0 / 3.0 * math.pi * self.lj.rlist**3 * s.n / float(np.prod(s.L))
+        if self._direct_half():
+            return int(est * 0.9) + 16
+        return int(est * 1.5) + 16
+
+    def _direct_half(self) -> bool:
+        return self.use_half and bool(ig.half_stencil_ok(self.nc, self.state.periodic))
+
     def _alloc_lists(self, maxnb: int) -> None:
+        """Rows of width ``maxnb`` for the list in use; the full list also when the half
+        list is derived from it (a periodic dimension too short for the half stencil). A
+        half row derived so can be as long as a full one (the atom sorted first in its
+        neighbourhood has every neighbour j > i). Unused lists are 1 × 1 placeholders."""
         n = self.state.n
-        self.nbr = np.zeros((n, maxnb), dtype=np.int32)
-        self.nnb = np.zeros(n, dtype=np.int32)
-        # A half row (j > i) can be as long as a full one for the first atoms in sorted order.
-        hmax = maxnb if self.use_half else 1
-        self.half = np.zeros((n if self.use_half else 1, hmax), dtype=np.int32)
+        self._direct = self._direct_half()
+        full = not self._direct
+        self.nbr = np.zeros((n if full else 1, maxnb if full else 1), dtype=np.int32)
+        self.nnb = np.zeros(n if full else 1, dtype=np.int32)
+        self.half = np.zeros((n if self.use_half else 1, maxnb if self.use_half else 1), np.int32)
         self.nhalf = np.zeros(n if self.use_half else 1, dtype=np.int32)
+        # Newton's third law on several threads: one force buffer per thread but the first.
+        nt = num_threads() if self.use_half else 1
+        self.fbuf = np.zeros((nt - 1, n if nt > 1 else 1, 3))
+        self._rows = n
 
     def _build_list(self, sort: bool) -> None:
         """(Re)build the list; ``sort=False`` rebuilds exactly the list made at x_ref."""
         s = self.state
+        if self._direct != self._direct_half() or self._rows != s.n:
+            self._alloc_lists(max(ig.list_width(self.nbr, self.half), 16))
         if sort:
             s.ref_shift = 0.0
         while True:
@@ -101,15 +123,11 @@ class MDSimulation:
                 sort = False
             else:
                 start = counting_sort(cell_of(s.x_ref, s.L, self.nc), int(np.prod(self.nc)))[1]
-                need = build_full_list(
-                    s.x_ref, s.L, s.periodic, self.nc, start, self.lj.rlist**2, self.nbr, self.nnb
-                )
-                if need <= self.nbr.shape[1]:
-                    if self.use_half:
-                        ig.half_from_full(self.nbr, self.nnb, self.half, self.nhalf)
-                    else:
-                        ig.drop_rows(s.ids, self.nnb, self.rowless)
-            if need <= self.nbr.shape[1]:
+                need = ig.build_lists(
+                    s.x_ref, s.ids, s.L, s.periodic, self.nc, start, self.lj.rlist**2,
+                    self.nbr, self.nnb, self.use_half, self.half, self.nhalf, self.rowless,
+                )  # fmt: skip
+            if need <= ig.list_width(self.nbr, self.half):
                 self.list_builds += 1
                 return
             self._alloc_lists(int(need * 1.3) + 8)
@@ -120,6 +138,10 @@ class MDSimulation:
             s.x, s.L, s.periodic, self.nbr, self.nnb, self.use_half, self.half, self.nhalf,
             self.lj.rc**2,
         )  # fmt: skip
+
+    def _compute_forces(self) -> None:
+        s = self.state
+        ig.compute_forces(*self._force_args(), s.f, self.fbuf, s.ids, self.rowless)
 
     # -- time loop ---------------------------------------------------------------------------
     @property
@@ -180,8 +202,8 @@ class MDSimulation:
             done, code = ig.run_steps(
                 n_steps - done_total, s.x, s.v, s.f, s.ids, s.x_ref, s.L, s.periodic, s.walls0,
                 s.epoch_time, s.step - s.epoch_step, self.dt, self.lj.rc**2, self.lj.rlist**2, (0.5 * self.lj.skin) ** 2,
-                self.nc, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, s.impulse,
-                thermo, r1[done_total:], chi[done_total:], counters, ref, self.rowless,
+                self.nc, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, self.fbuf,
+                s.impulse, thermo, r1[done_total:], chi[done_total:], counters, ref, self.rowless,
             )  # fmt: skip
             s.ref_shift = float(ref[1])
             s.step += done
@@ -191,12 +213,12 @@ class MDSimulation:
                 break
             if code == ig.GROW:
                 # The step in progress is half done: grow the list and finish it.
-                self._alloc_lists(int(self.nbr.shape[1] * 1.5) + 8)
+                self._alloc_lists(int(ig.list_width(self.nbr, self.half) * 1.5) + 8)
                 self._build_list(sort=False)
                 ig.finish_step(
                     s.x, s.v, s.f, s.ids, s.L, s.periodic, self.nbr, self.nnb, self.use_half,
-                    self.half, self.nhalf, self.lj.rc**2, self.dt, thermo,
-                    r1[done_total], chi[done_total],
+                    self.half, self.nhalf, self.fbuf, self.lj.rc**2, self.dt, thermo,
+                    r1[done_total], chi[done_total], self.rowless,
                 )  # fmt: skip
                 s.step += 1
                 self._sync_time()
@@ -240,14 +262,19 @@ class MDSimulation:
 
     def skip_force_rows(self, n: int) -> None:
         """From now on the frozen atoms with ids −1 … −``n`` (the window's inflow copy) have
-        no force row (``integrate.drop_rows``; full list only) and zero force: the force on
-        a frozen atom is never used, and every mobile atom's row still lists them, so the
-        mobile atoms move bit for bit as before at a fraction of the cost."""
+        no force row of their own (``integrate.drop_rows``; the half list keeps their pairs
+        with the other atoms and leaves out those among them, ``integrate.build_lists``) and
+        zero force: the force on a frozen atom is never used, and every pair with a mobile
+        atom is still listed, so the mobile atoms move bit for bit as before at a fraction
+        of the cost."""
         self.rowless = int(n)
-        if self.use_half or self.rowless <= 0:
+        if self.rowless <= 0:
             return
         s = self.state
-        ig.drop_rows(s.ids, self.nnb, self.rowless)
+        if self.use_half:
+            self._build_list(sort=False)  # the list made at x_ref, less the copy's pairs
+        else:
+            ig.drop_rows(s.ids, self.nnb, self.rowless)
         s.f[(s.ids < 0) & (s.ids >= -self.rowless)] = 0.0
 
     def replace_atoms(self, x: np.ndarray, v: np.ndarray, ids: np.ndarray) -> None:
@@ -261,10 +288,8 @@ class MDSimulation:
         s.ids = np.ascontiguousarray(ids, dtype=np.int64)
         s.f = np.zeros_like(s.x)
         s.x_ref = s.x.copy()
-        if self.nnb.shape[0] != s.n:
-            self._alloc_lists(max(int(self.nbr.shape[1]), 16))
         self._build_list(sort=True)
-        ig.compute_forces(*self._force_args(), s.f)
+        self._compute_forces()
 
     def scale_x(self, factor: float) -> None:
         """Stretch the box along x affinely by ``factor`` (dimensionless): x_i → factor·x_i,
@@ -282,7 +307,7 @@ class MDSimulation:
         s.walls0[[0, 2]] *= factor
         self.nc = grid_shape(s.L, self.lj.rlist)
         self._build_list(sort=True)
-        ig.compute_forces(*self._force_args(), s.f)
+        self._compute_forces()
 
     def galilean_shift(self, du: float) -> None:
         """Add ``du`` [σ/τ] to every x velocity and to both wall velocities."""
@@ -296,9 +321,15 @@ class MDSimulation:
         s = self.state
         pe = np.empty(s.n)
         vir = np.empty((s.n, 6))
-        energy_virial_full(
-            s.x, s.L, s.periodic, self.nbr, self.nnb, self.lj.rc**2, self.lj.ushift, pe, vir
-        )
+        if self.use_half:
+            energy_virial_half(
+                s.x, s.L, s.periodic, self.half, self.nhalf, self.lj.rc**2, self.lj.ushift,
+                pe, vir,
+            )  # fmt: skip
+        else:
+            energy_virial_full(
+                s.x, s.L, s.periodic, self.nbr, self.nnb, self.lj.rc**2, self.lj.ushift, pe, vir
+            )
         return pe, vir
 
     def mobile(self) -> np.ndarray:
@@ -415,12 +446,11 @@ class MDSimulation:
         sim.T_bath = None if th is None else th["T"]
         sim.tau_bath = 0.5 if th is None else th["tau"]
         sim.seed = int(ds.attrs["seed"])
-        sim.use_half = False
+        sim.use_half = True  # the default of __init__
         sim.list_builds = 0
         sim.rowless = 0  # a window sets its own (``MDWindow``)
         sim.nc = grid_shape(state.L, lj.rlist)
-        density = state.n / float(np.prod(state.L))
-        sim._alloc_lists(int(4.0 / 3.0 * math.pi * lj.rlist**3 * density * 1.5) + 16)
+        sim._alloc_lists(sim._row_estimate())
         sim._build_list(sort=False)
         return sim
 
