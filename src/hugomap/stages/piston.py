@@ -251,6 +251,10 @@ def piston_point(
         status, diagnostic = judge(ErrorTarget.of_scene(scene), r, str(r.pop("status")),
                                    str(r.pop("diagnostic")), span, P0=pole.P0, what="drive",
                                    unit=f" {b.units.axes['time']}")  # fmt: skip
+        if status == "target_not_reached" and span > 0:
+            # the steady track grows with the sample: its length is what to change
+            diagnostic += (f"; a drive that long needs a sample about "
+                           f"{r['time_to_target'] / span:.2g} times as long")  # fmt: skip
         values.update(r)
         log.info("point: D = %.6g +- %.2g, u_p %.6g (measured %.6g), P = %.6g +- %.2g, %s",
                  r["D"], r["D_err"], u_p, r["u_p_measured"], r["P"], r["P_err"], status)  # fmt: skip
