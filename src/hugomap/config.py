@@ -354,15 +354,19 @@ def _auto_scheme(name: str, sc: dict, cfg: dict) -> list[str]:
     if AUTO not in schemes:
         return []
     at = key_path(("scenes", name, "schemes"))
+    if "schemes" not in sc:  # inherited: name the key that was set
+        at = f"schemes = {_show(schemes)}, inherited as {at}"
+    else:
+        at = f"{at} = {_show(schemes)}"
     solver = registry.solver_of(sc)
     have = cost_laws.solvers_with_laws()
     if solver not in have:
-        return [f"{at} = {_show(schemes)}: auto needs measured cost laws, and the cost data "
+        return [f"{at}: auto needs measured cost laws, and the cost data "
                 f"({cost_laws.LAWS_FILE}) has none for solver {solver!r} (it has: "
                 f"{', '.join(have) or 'none'}); name the schemes instead"]  # fmt: skip
     D = (sc.get("target") or {}).get("D")
     if D is None:
-        return [f"{at} = {_show(schemes)}: auto chooses by the CPU to state D to "
+        return [f"{at}: auto chooses by the CPU to state D to "
                 f"scenes.{name}.target.D, which is not given; allowed range (0, 1]"]  # fmt: skip
     chosen, why = cost_laws.choose(solver, float(D))
     sc["schemes"] = list(dict.fromkeys(chosen if s == AUTO else s for s in schemes))

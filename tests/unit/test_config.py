@@ -189,7 +189,7 @@ def test_copper_config_is_valid_and_filled() -> None:
             "cu_solid",
             lambda s: s.update(schemes=["piston", "amx"]),
             "scenes.cu_solid.schemes[1] = 'amx': allowed values ['piston', 'amw', 'mw', "
-            "'dichotomy']",
+            "'dichotomy', 'auto']",
         ),
         (
             "cu_solid",

@@ -220,8 +220,9 @@ def test_auto_is_resolved_before_any_job(monkeypatch):
     assert sc["schemes"] == ["amw"]
     with pytest.raises(ConfigError) as exc:
         _scene(_cfg(schemes=["auto"], target={"P": 0.005}))
-    assert "scenes.lj_quick.schemes = ['auto']: auto chooses by the CPU to state D" in str(
-        exc.value
+    assert (
+        "schemes = ['auto'], inherited as scenes.lj_quick.schemes: auto chooses by the CPU to "
+        "state D to scenes.lj_quick.target.D, which is not given" in str(exc.value)
     )
     monkeypatch.setattr(cost_laws, "load", lambda: {"solvers": {}})
     with pytest.raises(ConfigError) as exc:
