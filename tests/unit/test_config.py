@@ -21,7 +21,8 @@ def test_default_config_is_valid_and_filled() -> None:
     cfg = load_config(ROOT / "config/config.yaml")
     sh = cfg["scenes"]["lj_liquid"]["shock"]
     assert sh["bin_width"] == 1.0 and sh["sample_every"] == 25  # schema defaults
-    assert len(sh["u_p"]) >= 6 and len(cfg["scenes"]["lj_fcc"]["shock"]["u_p"]) >= 6
+    assert len(sh["u_p"]) >= 5 and cfg["scenes"]["lj_liquid"]["target"]["D"] == 0.005
+    assert sh["residual_tol"] == pytest.approx(0.015)  # follows the target: 3 x 0.5 %
 
 
 @pytest.mark.parametrize("path", sorted((ROOT / "config").glob("*.yaml")), ids=lambda p: p.name)
@@ -380,7 +381,8 @@ def test_piston_gap_clears_the_start_where_the_sample_allows() -> None:
 
     sc = load_config(ROOT / "config/config.yaml")["scenes"]["lj_liquid"]
     assert sc["shock"]["piston_gap"] == PISTON_GAP == 30.0
-    assert piston_gap_room(sc) == pytest.approx(0.3 * 240 * 5.0 ** (1 / 3) - 8.0 - 3.0)
+    cells = sc["sample"]["cells"][0]
+    assert piston_gap_room(sc) == pytest.approx(0.3 * cells * 5.0 ** (1 / 3) - 8.0 - 3.0)
     cfg = tiny()
     out = validate_config(copy.deepcopy(cfg))["scenes"]["tiny"]
     room = piston_gap_room(out)
