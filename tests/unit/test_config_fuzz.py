@@ -313,9 +313,13 @@ def _from_schema(sub: dict, example: object = _NONE, wild: bool = True) -> st.Se
         def one(k: str, v: dict) -> st.SearchStrategy:
             return _from_schema(v, ex.get(k, _NONE), wild)
 
+        # near the tiny config, a block the config has keeps to its keys (a key it lacks
+        # would mostly be drawn where it conflicts with the others: the wild draws try them)
+        optional = {} if not wild and ex else {
+            k: one(k, v) for k, v in props.items() if k not in required
+        }  # fmt: skip
         good = st.fixed_dictionaries(
-            {k: one(k, v) for k, v in props.items() if k in required},
-            optional={k: one(k, v) for k, v in props.items() if k not in required},
+            {k: one(k, v) for k, v in props.items() if k in required}, optional=optional
         )
         if not wild and sub.get("minProperties"):  # near the tiny config: a valid size
             good = good.filter(lambda d, n=sub["minProperties"]: len(d) >= n)
