@@ -228,6 +228,13 @@ def _scene_checks(cfg: dict, own_tol: set) -> list[str]:
 
 
 WINDOW_SCHEMES = ("amw", "mw", "dichotomy")
+
+
+def _scene_schemes(sc: dict, cfg: dict) -> list:
+    """The schemes a validated scene runs: its own, else the top level's (default piston)."""
+    return list(sc.get("schemes", cfg.get("schemes", ["piston"])))
+
+
 AUTO = "auto"
 # With an error target (methods.target), shock.residual_tol defaults to this many times the
 # larger relative error asked: a residual combines the errors of D, u_p, ρ, P and E, each
@@ -255,7 +262,7 @@ def _target(name: str, sc: dict, cfg: dict, own_tol: bool) -> list[str]:
                 f"errors, allowed range (0, 1])"]  # fmt: skip
     if not own_tol:
         sc["shock"]["residual_tol"] = min(1.0, TOL_PER_TARGET * max(asked))
-    schemes = sc.get("schemes", cfg.get("schemes", ["piston"]))
+    schemes = _scene_schemes(sc, cfg)
     window_cpu = getattr(registry.backend(sc), "window_cpu_s", None)
     if "cpu_s" not in t or window_cpu is None or not set(schemes) & set(WINDOW_SCHEMES):
         return []
@@ -350,7 +357,7 @@ def _auto_scheme(name: str, sc: dict, cfg: dict) -> list[str]:
     least CPU for its ``target.D`` by the measured cost laws (``cost_laws.choose``); the
     scene then lists its schemes itself and says why in ``scheme_choice``. Refused: auto
     without a ``target.D``, or for a solver the cost data has no laws for."""
-    schemes = list(sc.get("schemes", cfg.get("schemes", ["piston"])))
+    schemes = _scene_schemes(sc, cfg)
     if AUTO not in schemes:
         return []
     at = key_path(("scenes", name, "schemes"))
@@ -359,7 +366,8 @@ def _auto_scheme(name: str, sc: dict, cfg: dict) -> list[str]:
     else:
         at = f"{at} = {_show(schemes)}"
     solver = registry.solver_of(sc)
-    have = cost_laws.solvers_with_laws()
+    laws = cost_laws.load()  # read once for the check and the choice
+    have = cost_laws.solvers_with_laws(laws)
     if solver not in have:
         return [f"{at}: auto needs measured cost laws, and the cost data "
                 f"({cost_laws.LAWS_FILE}) has none for solver {solver!r} (it has: "
@@ -368,7 +376,7 @@ def _auto_scheme(name: str, sc: dict, cfg: dict) -> list[str]:
     if D is None:
         return [f"{at}: auto chooses by the CPU to state D to "
                 f"scenes.{name}.target.D, which is not given; allowed range (0, 1]"]  # fmt: skip
-    chosen, why = cost_laws.choose(solver, float(D))
+    chosen, why = cost_laws.choose(solver, float(D), laws)
     sc["schemes"] = list(dict.fromkeys(chosen if s == AUTO else s for s in schemes))
     sc["scheme_choice"] = why
     return []

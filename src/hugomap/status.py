@@ -43,6 +43,7 @@ import xarray as xr
 from .config import load_config
 from .failures import MEASURED
 from .keys import point_tag
+from .methods.target import ErrorTarget
 
 DONE_STATES = MEASURED
 STATES = (*MEASURED, "failed", "running", "pending")
@@ -92,9 +93,9 @@ def _accuracy(ds: xr.Dataset) -> str:
     def num(k: str) -> float:
         return float(ds[k].values) if k in ds.variables and ds[k].ndim == 0 else math.nan
 
-    D, P, P0 = num("D"), num("P"), num("P0")
-    rel = {"D": num("D_err") / abs(D) if D else math.nan,
-           "P": num("P_err") / abs(P - (P0 if math.isfinite(P0) else 0.0))}  # fmt: skip
+    P0 = num("P0")
+    values = {k: num(k) for k in ("D", "D_err", "P", "P_err")}
+    rel = ErrorTarget.relative_errors(values, P0 if math.isfinite(P0) else 0.0)
     got = [f"{q} ± {100 * v:.2g} %" for q, v in rel.items() if math.isfinite(v)]
     want = [f"{q} {100 * num('target_' + q):g} %" for q in rel if math.isfinite(num("target_" + q))]
     return ", ".join(got) + (f" (target {', '.join(want)})" if got and want else "")
