@@ -12,6 +12,8 @@ layout and its cost model; what it hands back is neutral (``hugomap.states``): a
 
 from __future__ import annotations
 
+import copy
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -119,6 +121,12 @@ class Backend(Protocol):
     def cost(self, scene: dict, stage: str) -> Resources:
         """Resources of one job of ``stage`` (prepare, load, piston, reference, window)."""
 
+    def longer_sample(self, scene: dict, factor: float) -> dict | None:
+        """The scene with a sample ``factor`` (> 1) times as long along the shock and its
+        stages' ``shock.max_time`` as much longer (``lengthened``), for a piston that
+        missed its error target (``stages.piston``); None where the sample cannot grow (a
+        sample read from a file)."""
+
     def figure_labels(self, scene: dict) -> dict:
         """Figure text: ``axes`` (label and scale factor of V, P, u_p_measured, D), ``tag``
         (of the points), ``reference`` (the reference curve's name), ``title``."""
@@ -138,6 +146,22 @@ class Backend(Protocol):
         method (``scheme``: msst, nphug) on a homogeneous periodic box of the material at
         the sample's ``pole``, held on that pole's Hugoniot by the solver
         (``lammps.shockframe``)."""
+
+
+def lengthened(scene: dict, key: tuple, factor: float) -> dict:
+    """A copy of ``scene`` whose sample length at ``key`` (a path of keys and indices, e.g.
+    ("sample", "cells", 0)) is ``factor`` times as long (an integer count rounded up) and
+    whose ``shock.max_time``, the longest a stage may run, grows as much: a piston's drive
+    lasts as long as its front needs to cross the sample."""
+    out = copy.deepcopy(scene)
+    *head, last = key
+    box = out
+    for k in head:
+        box = box[k]
+    old = box[last]
+    box[last] = int(math.ceil(old * factor)) if isinstance(old, int) else float(old) * factor
+    out["shock"]["max_time"] = float(out["shock"]["max_time"]) * factor
+    return out
 
 
 #: ``Backend`` members a backend may lack: the stage that needs one asks for it with

@@ -115,6 +115,13 @@ POINT_VARS: dict[str, tuple[str, str]] = {
         "the averaging (window) or steady drive (piston) the point needed or would need to "
         "meet its target, from its error-vs-time law; NaN without a target",
     ),
+    "sample_factor": (
+        "1",
+        "piston points: how many times the scene's sample the point was run on (more than 1: "
+        "a first run missed the target, target.max_sample_factor)",
+    ),
+    "pilot_D_rel_err": ("1", "piston points run again: the first run's D_rel_err"),
+    "pilot_P_rel_err": ("1", "piston points run again: the first run's P_rel_err"),
     "n_samples": ("1", "profile samples averaged"),
     "average_time": ("tau", "window points: how long the steady state was averaged"),
     "wall_s": ("s", "wall-clock time of the point (load + drive)"),

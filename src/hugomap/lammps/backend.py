@@ -62,6 +62,7 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.linear_hugoniot import jump_state
+from ..backend import lengthened
 from ..io.dataset import UnitTable, lj_units, si_units
 from ..particles.fcc import lattice_constant
 from ..particles.pole import measure_pole, reference_pole
@@ -590,6 +591,10 @@ class LammpsBackend:
         """A snapshot's masses, species and unit labels (units lj: m = 1, ``Ar``)."""
         return {"masses": 1.0, "species": "Ar", "length_unit": "sigma", "time_unit": "tau",
                 "units": {"masses": "m", "momenta": "m*sigma/tau", "pe": "epsilon"}}  # fmt: skip
+
+    def longer_sample(self, scene: dict, factor: float) -> dict | None:
+        """More lattice cells along x (``backend.lengthened``)."""
+        return lengthened(scene, ("sample", "cells", 0), factor)
 
     # -- cost ------------------------------------------------------------------------------
     def cost(self, scene: dict, stage: str) -> Resources:

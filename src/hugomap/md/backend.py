@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ..backend import lengthened
 from ..io.dataset import lj_units
 from ..particles.fcc import lattice_constant
 from ..particles.pole import measure_pole, reference_pole
@@ -371,6 +372,13 @@ class MDBackend:
         length = s["cells"][0] * lattice_constant(s["rho0"])
         n_samples = sh["max_time"] / sh["dt"] / sh["sample_every"]
         return n_samples * (length / sh["bin_width"] + 1) * 11 * 8
+
+    def longer_sample(self, scene: dict, factor: float) -> dict | None:
+        """More FCC cells along x (``backend.lengthened``); None for a sample read from
+        ``sample.data_file``, whose length is the file's."""
+        if scene["sample"].get("data_file"):
+            return None
+        return lengthened(scene, ("sample", "cells", 0), factor)
 
     def cost(self, scene: dict, stage: str) -> Resources:
         """Memory: the state and neighbour list per atom, plus the profile history held and

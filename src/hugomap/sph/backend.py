@@ -37,6 +37,7 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.linear_hugoniot import shock_velocity
+from ..backend import lengthened
 from ..eos import EOS
 from ..failures import StageFailed
 from ..io.dataset import si_units
@@ -475,6 +476,11 @@ class CSPHBackend:
             d_min = min(d_min, u_lo * a / max(a - 1.0, 1e-9))
         dt = scene["numerics"]["cfl"] * s["dx"] / shock_velocity(u_hi, e["c0"], e["s"])
         return s["length"] / d_min / dt
+
+    def longer_sample(self, scene: dict, factor: float) -> dict | None:
+        """A longer ``sample.length`` (``backend.lengthened``); a porous sample draws its
+        pores anew over the whole length."""
+        return lengthened(scene, ("sample", "length"), factor)
 
     def cost(self, scene: dict, stage: str) -> Resources:
         n = self._particles(scene)

@@ -23,7 +23,7 @@ from ..failures import CheckpointError, HugomapFailure
 from ..methods.piston import History, drive, steady_track
 from ..methods.target import ErrorTarget, judge
 from ..registry import backend as backend_of
-from ..states import PistonFrame, Pole
+from ..states import PistonFrame, Pole, Resources
 from .files import (
     INFO_ATTR,
     Clock,
@@ -36,6 +36,8 @@ from .files import (
     write_extras,
     write_point,
 )
+from .load import load_to_target
+from .sample import prepare_sample
 
 log = logging.getLogger("hugomap")
 STALE_TMP_S = 60.0  # a temporary file not written to for this long was left by a killed write
@@ -190,13 +192,112 @@ def log_progress(
 PISTON_LAW = {"D": -1.5, "P": -1.0}
 
 
+# A re-run's drive is the one the first run's error law asks for, with this margin: an
+# 8-block error is itself uncertain by ~27 % (methods.target), and a sample that falls short
+# again costs a third run the user did not ask for.
+SIZE_MARGIN = 1.2
+# target.max_sample_factor where the target does not give it: a second run costs at most
+# about 4 times the first
+MAX_SAMPLE_FACTOR = 2.0
+
+
+def max_sample_factor(scene: dict) -> float:
+    """The scene's ``target.max_sample_factor`` (1 without a target: nothing to grow to)."""
+    t = scene.get("target") or {}
+    return float(t.get("max_sample_factor", MAX_SAMPLE_FACTOR)) if t else 1.0
+
+
 def piston_point(
     loaded: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike,
     scheme: str = "piston",
 ) -> Path:  # fmt: skip
+    """The piston's point (``drive_point``); one that misses its error target (status
+    ``target_not_reached``) is run once more on a sample the factor ``grow_to_target``
+    chose longer (``Backend.longer_sample``: prepared, loaded and driven in the folder
+    ``<out stem>_sized``, the first run kept there as ``pilot.nc``). The second run's point
+    counts the first's CPU and the longer sample's preparation in its cost and records the
+    factor and the first run's relative errors (``sample_factor``, ``pilot_D_rel_err``,
+    ``pilot_P_rel_err``). A killed job resumes: a finished first run,
+    sample or loading is not run again."""
+    out = Path(out)
+    room = out.with_name(f"{out.stem}_sized")
+    pilot = room / "pilot.nc"
+    if not pilot.exists():
+        drive_point(loaded, scene, u_p, out, scheme)
+        if not float(open_dataset(out).get("sample_factor", 1.0)) > 1.0:
+            return out
+        room.mkdir(exist_ok=True)
+        os.replace(out, pilot)
+    first = open_dataset(pilot)
+    factor = float(first["sample_factor"])
+    b = backend_of(scene)
+    longer = b.longer_sample(scene, factor)
+    log.info(
+        "re-running on a sample %.3g times as long: %s", factor, str(first["diagnostic"].values)
+    )
+    sample, loaded2 = room / "sample.nc", room / "loaded.nc"
+    spent = room / "spent.json"  # the first run's cost and the longer sample's preparation
+    if not sample.exists():
+        clock = Clock({k: float(first[k]) for k in ("wall_s", "cpu_s", "atom_steps") if k in first})
+        prepare_sample(longer, sample)
+        spent.write_text(json.dumps(clock.cost()))
+    prior = json.loads(spent.read_text()) if spent.exists() else {}
+    if not loaded2.exists():
+        load_to_target(sample, longer, u_p, loaded2)
+    rel = {q: float(first[f"{q}_rel_err"]) for q in ("D", "P") if f"{q}_rel_err" in first}
+    return drive_point(loaded2, longer, u_p, out, scheme, prior=prior,
+                       extra={"sample_factor": factor, **{f"pilot_{q}_rel_err": v
+                                                          for q, v in rel.items()}})  # fmt: skip
+
+
+def grow_to_target(
+    need: float, cpu_s: float, target: ErrorTarget, max_factor: float
+) -> tuple[float, str]:  # fmt: skip
+    """How much longer a piston's sample grows after missing its target, and why: ``need``
+    is the drive the error law asks for over the drive it had (the sample grows as the
+    drive, its CPU as the square: atoms times steps); the factor is ``need`` x SIZE_MARGIN,
+    refused (1.0) above ``max_factor`` (``target.max_sample_factor``) or where the second
+    run, about factor² x ``cpu_s`` (the first run's), would overrun ``target.cpu_s`` with
+    the first's spent."""
+    factor = need * SIZE_MARGIN
+    if not factor > 1.0:
+        return 1.0, ""
+    if factor > max_factor:
+        return 1.0, (f"; not run again: {factor:.3g} times with a {SIZE_MARGIN - 1:.0%} "
+                     f"margin, above target.max_sample_factor = {max_factor:g}")  # fmt: skip
+    if target.cpu_s is not None and cpu_s * (1.0 + factor**2) > target.cpu_s:
+        return 1.0, (f"; not run again: {factor:.3g} times with a {SIZE_MARGIN - 1:.0%} margin "
+                     f"would cost about "
+                     f"{cpu_s * factor**2:.3g} s more, above target.cpu_s = "
+                     f"{target.cpu_s:g} s")  # fmt: skip
+    return factor, f"; run again on a sample {factor:.3g} times as long"
+
+
+def job_cost(scene: dict) -> Resources:
+    """A piston job's resources (``Backend.cost``): its first run's, and where its target
+    may grow the sample (``target.max_sample_factor`` F > 1) the longer sample's
+    preparation, loading and drive beside it; its memory the longer sample's."""
+    b = backend_of(scene)
+    first = b.cost(scene, "piston")
+    factor = max_sample_factor(scene)
+    longer = b.longer_sample(scene, factor) if factor > 1.0 else None
+    if longer is None:
+        return first
+    grown = [b.cost(longer, stage) for stage in ("prepare", "load", "piston")]
+    return Resources(max(first.mem_mb, *(g.mem_mb for g in grown)),
+                     first.cpu_s + sum(g.cpu_s for g in grown), first.ranks)  # fmt: skip
+
+
+def drive_point(
+    loaded: str | os.PathLike, scene: dict, u_p: float, out: str | os.PathLike,
+    scheme: str = "piston", prior: dict | None = None, extra: dict | None = None,
+) -> Path:  # fmt: skip
     """Continue the piston from ``loaded`` (or its partial checkpoint) until the front is
     ``rear_margin`` from the far end (``methods.piston.drive``), measure the point over the
-    drive samples, write the backend's extras (snapshots) and the point file."""
+    drive samples, write the backend's extras (snapshots) and the point file (with the
+    ``extra`` values; its cost the loading's, this drive's and ``prior``'s). A first run
+    (``prior`` None) that misses its target records in ``sample_factor`` the factor
+    ``grow_to_target`` chose (1: no second run)."""
     b = backend_of(scene)
     sh = scene["shock"]
     ds = open_dataset(loaded)
@@ -215,7 +316,7 @@ def piston_point(
         b.read_checkpoint(loaded)  # verified too: its pole is used whichever state resumes
         src, sim, h = resumed
     pole = Pole.from_dataset(ds)
-    clock = Clock(json.loads(src.attrs.get("cost", ds.attrs.get("cost", "{}"))))
+    clock = Clock(json.loads(src.attrs.get("cost", ds.attrs.get("cost", "{}"))), prior or {})
     frame = b.piston_frame(sim, scene, u_p, info)
     profile = b.profile(sim, scene, info)
     step0 = sim.steps
@@ -238,7 +339,8 @@ def piston_point(
     except HugomapFailure as exc:
         status, diagnostic = exc.status, exc.diagnostic
         log.error("%s: %s", status, diagnostic)
-    values = {**base, **clock.cost(sim.n_particles * (sim.steps - step0))}
+    values = {**base, "sample_factor": 1.0, **(extra or {}),
+              **clock.cost(sim.n_particles * (sim.steps - step0))}  # fmt: skip
     a = h.arrays()
     if status == "ok":
         d = a["stage"] == 1
@@ -261,10 +363,18 @@ def piston_point(
                                    str(r.pop("diagnostic")), span, P0=pole.P0,
                                    exponents=PISTON_LAW, what="drive",
                                    unit=f" {b.units.axes['time']}")  # fmt: skip
+        target = ErrorTarget.of_scene(scene)
         if status == "target_not_reached" and span > 0:
             # the steady track grows with the sample: its length is what to change
-            diagnostic += (f"; a drive that long needs a sample about "
-                           f"{r['time_to_target'] / span:.2g} times as long")  # fmt: skip
+            need = r["time_to_target"] / span
+            diagnostic += f"; a drive that long needs a sample about {need:.2g} times as long"
+            if prior is None:
+                factor, note = grow_to_target(need, values["cpu_s"], target,
+                                              max_sample_factor(scene))  # fmt: skip
+                if factor > 1.0 and b.longer_sample(scene, factor) is None:
+                    factor, note = 1.0, "; not run again: the sample's length is its file's"
+                diagnostic += note
+                values["sample_factor"] = factor
         values.update(r)
         log.info("point: D = %.6g +- %.2g, u_p %.6g (measured %.6g), P = %.6g +- %.2g, %s",
                  r["D"], r["D_err"], u_p, r["u_p_measured"], r["P"], r["P_err"], status)  # fmt: skip

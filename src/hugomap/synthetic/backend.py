@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ..backend import lengthened
 from ..io.dataset import si_units
 from ..states import ControlParams, PistonFrame, Pole, Resources, SlabState, WindowStart
 from .model import FIELDS, PISTON, SyntheticPiston, SyntheticWindow, shocked_state
@@ -142,6 +143,10 @@ class SyntheticBackend:
         self, window, out: Path, scene: dict, u_p: float, scheme: str, info: dict
     ) -> None:
         """No snapshots: nothing to look at."""
+
+    def longer_sample(self, scene: dict, factor: float) -> dict | None:
+        """A longer ``sample.length`` (``backend.lengthened``)."""
+        return lengthened(scene, ("sample", "length"), factor)
 
     def cost(self, scene: dict, stage: str) -> Resources:
         return Resources(512, 1.0)
