@@ -548,3 +548,15 @@ def test_a_done_point_shows_the_accuracy_it_bought(tmp_path: Path) -> None:
     assert row.split()[2] == "target_not_reached"
     assert "D ± 0.3 %, P ± 2 % (target D 0.2 %, P 1 %); D's error 0.3 %" in row
     assert "1 done (0 ok, 1 target not reached, 0 not converged)" in text
+
+
+def test_a_piston_run_again_says_on_what_sample(tmp_path: Path) -> None:
+    """A piston point run a second time on a longer sample (``stages.piston``) says so."""
+    values = {"piston_velocity": 0.5, "D": 4.0, "D_err": 0.004, "P": 10.0, "P_err": 0.02,
+              "target_D": 0.002, "sample_factor": 1.43}  # fmt: skip
+    ds = point_dataset(values, {"rho0": 0.8, "P0": 0.0}, None, "piston", "tiny", "ok", "", {},
+                       lj_units())  # fmt: skip
+    write_netcdf(ds, tmp_path / "tiny" / "up0.5" / "piston.nc")
+    text = format_table(sweep_status(tmp_path, _config(), now=NOW))
+    row = next(ln for ln in text.splitlines() if ln.split()[:2] == ["0.5", "piston"])
+    assert "D ± 0.1 %, P ± 0.2 % (target D 0.2 %, run again on a sample 1.4 × as long)" in row
