@@ -101,6 +101,11 @@ def test_a_piston_that_misses_runs_again_on_a_longer_sample(tmp_path: Path) -> N
     assert {p.name: p.stat().st_mtime_ns for p in room.iterdir()} == stamps
     with xr.open_dataset(again) as a:
         assert float(a["D"]) == float(ds["D"]) and float(a["D_err"]) == float(ds["D_err"])
+    # a config changed before the rerun: what the folder holds is not reused
+    (tmp_path / "piston.nc").unlink()
+    piston_point(tmp_path / "loaded.nc", _scene(D=7.5e-5), U_P, tmp_path / "piston.nc")
+    with xr.open_dataset(room / "pilot.nc") as first:
+        assert yaml.safe_load(first.attrs["scene_config"])["target"]["D"] == 7.5e-5
 
 
 def test_a_miss_beyond_the_cap_is_not_run_again_and_says_why(tmp_path: Path) -> None:

@@ -12,9 +12,11 @@ from __future__ import annotations
 import json
 import logging
 import os
+import shutil
 import time
 from pathlib import Path
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -222,6 +224,7 @@ def piston_point(
     out = Path(out)
     room = out.with_name(f"{out.stem}_sized")
     pilot = room / "pilot.nc"
+    _clear_stale(room, scene)
     if not pilot.exists():
         drive_point(loaded, scene, u_p, out, scheme)
         if not float(open_dataset(out).get("sample_factor", 1.0)) > 1.0:
@@ -248,6 +251,34 @@ def piston_point(
     return drive_point(loaded2, longer, u_p, out, scheme, prior=prior,
                        extra={"sample_factor": factor, **{f"pilot_{q}_rel_err": v
                                                           for q, v in rel.items()}})  # fmt: skip
+
+
+def _same_scene(path: Path, scene: dict) -> bool:
+    """Whether the file at ``path`` was made for ``scene`` (its ``scene_config``)."""
+    with netCDF4.Dataset(path) as nc:
+        made = json.loads(getattr(nc, "scene_config", "null"))
+    return json.dumps(made, sort_keys=True) == json.dumps(scene, sort_keys=True)
+
+
+def _clear_stale(room: Path, scene: dict) -> None:
+    """Empty ``room`` (a second run's folder) where what it holds was made for another
+    scene (a config changed between a killed job and its rerun): a first run whose scene
+    differs, or a sample or loading other than the longer sample its factor asks for."""
+    pilot = room / "pilot.nc"
+    if not pilot.exists():
+        if room.exists():
+            shutil.rmtree(room)
+        return
+    ok = _same_scene(pilot, scene)
+    if ok:
+        with netCDF4.Dataset(pilot) as nc:
+            factor = float(nc["sample_factor"][...])
+        longer = backend_of(scene).longer_sample(scene, factor)
+        ok = all(_same_scene(room / f, longer) for f in ("sample.nc", "loaded.nc")
+                 if (room / f).exists())  # fmt: skip
+    if not ok:
+        log.warning("%s holds a run of another scene: starting again", room)
+        shutil.rmtree(room)
 
 
 def grow_to_target(
