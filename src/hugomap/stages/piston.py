@@ -185,15 +185,6 @@ def log_progress(
     )  # fmt: skip
 
 
-# A piston's errors against the length of its steady drive T, which grows with its sample,
-# follow the slow law of methods.target (K_DEFAULT, T^(-1/2)), so that the drive it states
-# is not short: D is the slope of a front that wanders (a random walk's slope error falls as
-# T^(-1/2), white noise about the line's as T^(-3/2)), and P the mean of a slab of fixed
-# length (shock.avg_length) over T. The LJ liquid's 240-cell piston at u_p = 2 run again on
-# a sample 1.58 times as long (a drive 1.61 times as long) stated 0.222 % in D for 0.303 %:
-# T^-0.66; T^(-3/2), assumed before, had asked for too short a sample.
-
-
 # A re-run's drive is the one the first run's error law asks for, with this margin: an
 # 8-block error is itself uncertain by ~27 % (methods.target), and a sample that falls short
 # again costs a third run the user did not ask for.
@@ -224,16 +215,16 @@ def piston_point(
     out = Path(out)
     room = out.with_name(f"{out.stem}_sized")
     pilot = room / "pilot.nc"
-    _clear_stale(room, scene)
-    if not pilot.exists():
+    b = backend_of(scene)
+    first = _kept_first_run(room, scene, b)
+    if first is None:
         drive_point(loaded, scene, u_p, out, scheme)
-        if not float(open_dataset(out).get("sample_factor", 1.0)) > 1.0:
+        first = open_dataset(out)
+        if not float(first.get("sample_factor", 1.0)) > 1.0:
             return out
         room.mkdir(exist_ok=True)
         os.replace(out, pilot)
-    first = open_dataset(pilot)
     factor = float(first["sample_factor"])
-    b = backend_of(scene)
     longer = b.longer_sample(scene, factor)
     log.info(
         "re-running on a sample %.3g times as long: %s", factor, str(first["diagnostic"].values)
@@ -253,32 +244,32 @@ def piston_point(
                                                           for q, v in rel.items()}})  # fmt: skip
 
 
-def _same_scene(path: Path, scene: dict) -> bool:
-    """Whether the file at ``path`` was made for ``scene`` (its ``scene_config``)."""
-    with netCDF4.Dataset(path) as nc:
-        made = json.loads(getattr(nc, "scene_config", "null"))
-    return json.dumps(made, sort_keys=True) == json.dumps(scene, sort_keys=True)
+def _same_scene(made: str, scene: dict) -> bool:
+    """Whether a file's ``scene_config`` attribute (``made``) is ``scene``."""
+    return json.dumps(json.loads(made), sort_keys=True) == json.dumps(scene, sort_keys=True)
 
 
-def _clear_stale(room: Path, scene: dict) -> None:
-    """Empty ``room`` (a second run's folder) where what it holds was made for another
-    scene (a config changed between a killed job and its rerun): a first run whose scene
-    differs, or a sample or loading other than the longer sample its factor asks for."""
+def _kept_first_run(room: Path, scene: dict, b) -> xr.Dataset | None:
+    """The first run kept in ``room`` (a second run's folder, ``pilot.nc``), or None; a
+    room holding what was made for another scene (a config changed between a killed job
+    and its rerun: a first run of another scene, or a sample or loading other than the
+    longer sample its factor asks for) is emptied, and None."""
     pilot = room / "pilot.nc"
-    if not pilot.exists():
-        if room.exists():
-            shutil.rmtree(room)
-        return
-    ok = _same_scene(pilot, scene)
+    first = open_dataset(pilot) if pilot.exists() else None
+    ok = first is not None and _same_scene(first.attrs.get("scene_config", "null"), scene)
     if ok:
-        with netCDF4.Dataset(pilot) as nc:
-            factor = float(nc["sample_factor"][...])
-        longer = backend_of(scene).longer_sample(scene, factor)
-        ok = all(_same_scene(room / f, longer) for f in ("sample.nc", "loaded.nc")
-                 if (room / f).exists())  # fmt: skip
-    if not ok:
-        log.warning("%s holds a run of another scene: starting again", room)
+        longer = b.longer_sample(scene, float(first["sample_factor"]))
+        for f in (room / "sample.nc", room / "loaded.nc"):
+            if ok and f.exists():
+                with netCDF4.Dataset(f) as nc:
+                    ok = _same_scene(getattr(nc, "scene_config", "null"), longer)
+    if ok:
+        return first
+    if room.exists():
+        if first is not None:
+            log.warning("%s holds a run of another scene: starting again", room)
         shutil.rmtree(room)
+    return None
 
 
 def grow_to_target(
@@ -293,14 +284,12 @@ def grow_to_target(
     factor = need * SIZE_MARGIN
     if not factor > 1.0:
         return 1.0, ""
+    tried = f"; not run again: {factor:.3g} times with a {SIZE_MARGIN - 1:.0%} margin"
     if factor > max_factor:
-        return 1.0, (f"; not run again: {factor:.3g} times with a {SIZE_MARGIN - 1:.0%} "
-                     f"margin, above target.max_sample_factor = {max_factor:g}")  # fmt: skip
+        return 1.0, f"{tried}, above target.max_sample_factor = {max_factor:g}"
     if target.cpu_s is not None and cpu_s * (1.0 + factor**2) > target.cpu_s:
-        return 1.0, (f"; not run again: {factor:.3g} times with a {SIZE_MARGIN - 1:.0%} margin "
-                     f"would cost about "
-                     f"{cpu_s * factor**2:.3g} s more, above target.cpu_s = "
-                     f"{target.cpu_s:g} s")  # fmt: skip
+        return 1.0, (f"{tried} would cost about {cpu_s * factor**2:.3g} s more, above "
+                     f"target.cpu_s = {target.cpu_s:g} s")  # fmt: skip
     return factor, f"; run again on a sample {factor:.3g} times as long"
 
 
@@ -388,7 +377,12 @@ def drive_point(
         )  # fmt: skip
         r.pop("u_p"), r.pop("u_p_err")  # u_p is exact: the dataset's coordinate
         # a piston cannot run on once its front nears the far end: it is judged on its
-        # steady track's span, and told the span it would need (methods.target)
+        # steady track's span, and told the span it would need (methods.target), on the slow
+        # law T^(-1/2) (K_DEFAULT) so that the span it states is not short: its D is the
+        # slope of a front that wanders (a random walk's slope error falls as T^(-1/2),
+        # white noise about the line's as T^(-3/2)), its P the mean of a slab of fixed length.
+        # The LJ liquid's 240-cell piston at u_p = 2, run again with a drive 1.61 times as
+        # long, stated 0.222 % in D for 0.303 %: T^-0.66.
         span = float(np.ptp(track[0])) if len(track[0]) else 0.0
         target = ErrorTarget.of_scene(scene)
         status, diagnostic = judge(target, r, str(r.pop("status")), str(r.pop("diagnostic")),
