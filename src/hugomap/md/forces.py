@@ -203,7 +203,8 @@ def forces_half_threads(
             _half_rows(x, L, periodic, half, nhalf, rc2, lo, hi, f)
         else:
             _half_rows(x, L, periodic, half, nhalf, rc2, lo, hi, fbuf[t - 1])
-    for i in prange(n):
+    # The sum is serial: a second parallel loop would cost a thread wake-up (``integrate.kick``).
+    for i in range(n):
         for t in range(nt - 1):
             f[i, 0] += fbuf[t, i, 0]
             f[i, 1] += fbuf[t, i, 1]

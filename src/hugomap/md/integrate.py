@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..numba_conf import njit, pjit, prange
+from ..numba_conf import njit
 from .forces import forces_full, forces_half, forces_half_threads
 from .neighbor import (
     build_full_list,
@@ -40,14 +40,16 @@ OK, GROW, NAN, CFL, LOST = 0, 1, 2, 3, 4
 STATUS_NAMES = {OK: "ok", GROW: "grow", NAN: "nan", CFL: "cfl", LOST: "atom_lost"}
 
 
-@pjit
+@njit
 def kick(v: np.ndarray, f: np.ndarray, ids: np.ndarray, h: float) -> None:
     """v ← v + h F (m = 1) for every mobile atom; frozen atoms (ids < 0) keep their velocity.
 
     Frozen atoms are the rigid boundary layers of the moving window (``particles.window``):
     they move at their own constant velocity and act on the mobile atoms through the pair
     forces."""
-    for i in prange(v.shape[0]):
+    # Serial: waking numba's waiting threads (OMP_WAIT_POLICY=PASSIVE, ``numba_conf``) for a
+    # parallel loop costs more than this loop over tens of thousands of atoms.
+    for i in range(v.shape[0]):
         if ids[i] >= 0:
             v[i, 0] += h * f[i, 0]
             v[i, 1] += h * f[i, 1]
