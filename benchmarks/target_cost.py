@@ -21,7 +21,7 @@ for AMW and for the piston, read from a run of ``config/target_cost.yaml``.
 Output: JSON lines, one per (u_p, scheme, target), then one per point (``kind: point``), then
 one line per scheme with the cost law CPU = c t^m fitted over every u_p and target
 (``kind: law``), each with the machine; ``--out`` draws CPU against the target, one curve
-per scheme and u_p; ``--laws`` writes the laws as the cost data ``schemes: [auto]`` reads.
+per scheme and u_p, with each piston run at its own stated error; ``--laws`` writes the laws as the cost data ``schemes: [auto]`` reads.
 """
 
 from __future__ import annotations
@@ -153,7 +153,9 @@ def laws(rows: list[dict]) -> list[dict]:
     return out
 
 
-def draw(rows: list[dict], out: Path) -> None:
+def draw(rows: list[dict], points: list[dict], out: Path) -> None:
+    """CPU against the target, one panel per u_p: each scheme's targets (filled where run or
+    interpolated, hollow where extrapolated) and each piston run at its own stated error."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -174,10 +176,14 @@ def draw(rows: list[dict], out: Path) -> None:
             ax.plot(t[meas], y[meas], mk, color=col, label=f"{scheme}")
             ax.plot(t[~meas], y[~meas], mk, mfc="none", color=col,
                     label=f"{scheme} (extrapolated)" if (~meas).any() else None)  # fmt: skip
+        runs = [p for p in points if p["scheme"] == "piston" and p["u_p"] == u]
+        if runs:
+            ax.plot([100 * p["D_rel_err"] for p in runs], [p["cpu_s"] for p in runs], "x",
+                    color="tab:red", label="piston runs (stated error)")  # fmt: skip
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.invert_xaxis()
-        ax.set_xlabel("target: relative standard error of D [%]")
+        ax.set_xlabel("relative standard error of D [%]: the target, or a run's own")
         ax.set_ylabel("CPU a point [s]")
         ax.set_title(f"LJ liquid, u_p = {u:g} σ/τ")
         ax.legend(fontsize=8)
@@ -209,7 +215,7 @@ def main() -> None:
     if a.out:
         a.out.mkdir(parents=True, exist_ok=True)
         (a.out / "target_cost.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
-        draw(rows, a.out)
+        draw(rows, points, a.out)
     if a.laws:
         data = {
             "about": "CPU a point needs to state D to a relative error t: cpu_s = c t^m, "

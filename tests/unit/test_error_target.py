@@ -235,8 +235,8 @@ def test_auto_is_resolved_before_any_job(monkeypatch):
 def test_the_shipped_cost_laws_choose_the_piston_loose_and_the_window_tight():
     """The measured laws (LJ liquid, benchmarks/target_cost.py) carry their machine and
     date, and their curves cross between 1 % and 0.1 %: the piston at 1 %, AMW at 0.1 %
-    (measured: piston 12-41 s against AMW 66-90 s at 1 %, 457-515 s extrapolated against
-    124-148 s at 0.1 %)."""
+    (measured at u_p 1 and 2: piston 9-65 s against AMW 62-85 s at 1 %, 1060-3796 s against
+    118-140 s at 0.1 %)."""
     data = cost_laws.load()
     assert data["machine"] and data["date"] and cost_laws.finite_laws(data)
     assert cost_laws.solvers_with_laws(data) == ["md"]
