@@ -3,10 +3,10 @@
 The problem is LAMMPS's ``bench/in.lj``: fcc at ρ* = 0.8442, 20 × 20 × 20 cells (32,000
 atoms), T* = 1.44 from uniform random velocities (``velocity create``'s default; hugomap's
 worker draws them so too, ``uniform_velocities``), unshifted ``lj/cut`` at rc = 2.5 σ, skin
-0.3 σ, NVE, Δt = 0.005 τ, 100 steps. One difference is kept on purpose: LAMMPS's input rebuilds the neighbour list every 20
-steps without checking (``neigh_modify delay 0 every 20 check no``), while hugomap rebuilds
-whenever an atom has moved more than skin/2 since the last build (safe, and at T* = 1.44
-about every 8 steps). Both timings include their list builds. So that the two can also be
+0.3 σ, NVE, Δt = 0.005 τ, 100 steps. One difference is kept on purpose: LAMMPS's input
+rebuilds the neighbour list every 20 steps without checking (``neigh_modify delay 0 every 20
+check no``), while hugomap rebuilds whenever an atom has moved more than skin/2 since the
+last build (safe, and at T* = 1.44 about every 8 steps). Both timings include their list builds. So that the two can also be
 set side by side at the same list policy, LAMMPS runs once more with ``neigh_modify delay 0
 every 1 check yes`` (rebuild once an atom has moved skin/2: hugomap's rule); those rows say
 ``"list": "checked"``, and the last line gives the ratio against both.
