@@ -217,8 +217,7 @@ def lammps_configs(lmp: str, mpiexec: str | None, wrap: list[str]) -> list[tuple
         ]
     if mpiexec:
         mpi = [mpiexec, "-n", "2", *wrap, *opt]
-        cfg += [(2, "2 MPI ranks, -sf opt", mpi, 1, "bench")]
-        cfg += [(2, "2 MPI ranks, -sf opt", mpi, 1, "checked")]
+        cfg += [(2, "2 MPI ranks, -sf opt", mpi, 1, policy) for policy in POLICIES]
     return cfg
 
 

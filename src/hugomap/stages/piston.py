@@ -381,8 +381,6 @@ def drive_point(
         # law T^(-1/2) (K_DEFAULT) so that the span it states is not short: its D is the
         # slope of a front that wanders (a random walk's slope error falls as T^(-1/2),
         # white noise about the line's as T^(-3/2)), its P the mean of a slab of fixed length.
-        # The LJ liquid's 240-cell piston at u_p = 2, run again with a drive 1.61 times as
-        # long, stated 0.222 % in D for 0.303 %: T^-0.66.
         span = float(np.ptp(track[0])) if len(track[0]) else 0.0
         target = ErrorTarget.of_scene(scene)
         status, diagnostic = judge(target, r, str(r.pop("status")), str(r.pop("diagnostic")),
