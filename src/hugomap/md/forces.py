@@ -11,7 +11,9 @@ Components are stored in the order xx, yy, zz, xy, xz, yz (``VIRIAL_COMPONENTS``
 The pair loops are branch-free (``lj_pair``'s cutoff is a select, not ``if r2 < rc2``) so
 that LLVM can vectorise them once ``lj_pair`` is inlined; the full-list kernel runs rows in
 parallel, the half-list kernel serially with Newton's third law (half the pair work, for one
-thread).
+thread). The hot loops read list entries as unsigned (``np.uint64``): numba gives a
+signed index a test for negative values (Python's wraparound) at every access, which an
+unsigned one skips.
 """
 
 from __future__ import annotations
@@ -55,7 +57,7 @@ def forces_full(
         fy = 0.0
         fz = 0.0
         for m in range(nnb[i]):
-            j = nbr[i, m]
+            j = np.uint64(nbr[i, m])  # unsigned: no negative-index wraparound (module doc)
             dx = xi - x[j, 0]
             dy = yi - x[j, 1]
             dz = zi - x[j, 2]
@@ -121,7 +123,7 @@ def _half_rows(
         zi = x[i, 2]
         k = nhalf[i]
         for m in range(k):
-            j = half[i, m]
+            j = np.uint64(half[i, m])
             bx[m] = x[j, 0]
             by[m] = x[j, 1]
             bz[m] = x[j, 2]
@@ -152,7 +154,7 @@ def _half_rows(
             fy += gy
             fz += gz
         for m in range(k):
-            j = half[i, m]
+            j = np.uint64(half[i, m])
             out[j, 0] -= bx[m]
             out[j, 1] -= by[m]
             out[j, 2] -= bz[m]

@@ -66,6 +66,10 @@ def counting_sort(cell: np.ndarray, ncells: int) -> tuple[np.ndarray, np.ndarray
 
 
 REACH = 2  # stencil half-width in cells (bins of side ≥ rlist/2)
+# Unsigned counters and indices in the hot loops: numba gives a signed index a test for
+# negative values (Python's wraparound) at every access, which an unsigned one skips.
+ZERO = np.uint64(0)
+ONE = np.uint64(1)
 
 
 @njit
@@ -102,8 +106,9 @@ def build_full_list(
     per pair (except along a periodic dimension too short for the stencil, walked once round
     with a per-pair minimum image instead). Then for each atom of the cell one long loop
     computes the squared distances (vectorisable) and one appends the row branch-free to a
-    scratch row (j is always written and the length grows by the 0/1 test), which is then
-    copied to ``nbr`` up to its width.
+    scratch row (the candidate's place k is always written and the length grows by the 0/1
+    test; k rather than j, so that the loop reads one buffer less), whose entries are then
+    mapped to atoms (j = bj[k]) into ``nbr`` up to its width.
 
     Returns the largest row length needed; if it exceeds ``nbr.shape[1]`` the rows were cut
     and the caller must grow ``nbr`` and build again.
@@ -167,7 +172,7 @@ def build_full_list(
                 xlo0, xhi0, sx0 = max(cx - REACH, 0), min(cx + REACH, nx - 1), 0.0
                 xlo1, xhi1, sx1 = 0, -1, 0.0
             # Gather the candidates, each at the periodic image seen from this cell.
-            ncand = 0
+            ncand = ZERO
             self0 = -1
             for a in oz:
                 kz = cz + a
@@ -206,13 +211,13 @@ def build_full_list(
                             j1 = start[row + xhi1 + 1]
                             sx = sx1
                         if a == 0 and b == 0 and j0 <= start[c] < j1:
-                            self0 = ncand + start[c] - j0
-                        for j in range(j0, j1):
+                            self0 = int(ncand) + start[c] - j0
+                        for j in range(np.uint64(j0), np.uint64(j1)):
                             bx[ncand] = x[j, 0] + sx
                             by[ncand] = x[j, 1] + sy
                             bz[ncand] = x[j, 2] + sz
                             bj[ncand] = j
-                            ncand += 1
+                            ncand += ONE
             for i in range(start[c], start[c + 1]):
                 xi = x[i, 0]
                 yi = x[i, 1]
@@ -233,14 +238,15 @@ def build_full_list(
                         dz = zi - bz[k]
                         r2[k] = dx * dx + dy * dy + dz * dz
                 r2[self0 + i - start[c]] = np.inf
-                count = 0
+                count = ZERO
                 for k in range(ncand):
-                    rowbuf[count] = bj[k]
-                    count += r2[k] < rlist2
+                    rowbuf[count] = k
+                    count += np.uint64(r2[k] < rlist2)
+                count = int(count)
                 m = min(count, maxnb)
                 for k in range(m):
-                    nbr[i, k] = rowbuf[k]
-                nnb[i] = min(count, maxnb)
+                    nbr[i, k] = bj[np.uint64(rowbuf[k])]
+                nnb[i] = m
                 need = max(need, count)
     return need
 
@@ -368,7 +374,7 @@ def build_half_list(
             cz = c // (nx * ny)
             # Gather the candidates run by run (written out here: as a function called per
             # run, with its arrays' reference counting, the gather took twice as long).
-            ncand = 0
+            ncand = ZERO
             for run in range(13):
                 if run == 0:  # own row first: cells cx … cx + 2, from cell c's own atoms
                     a, b, lo, hi = 0, 0, cx, cx + REACH
@@ -409,13 +415,13 @@ def build_half_list(
                     j0 = j0a if seg == 0 else j0b
                     j1 = j1a if seg == 0 else j1b
                     sx = sxa if seg == 0 else sxb
-                    for j in range(j0, j1):
+                    for j in range(np.uint64(j0), np.uint64(j1)):
                         bx[ncand] = x[j, 0] + sx
                         by[ncand] = x[j, 1] + sy
                         bz[ncand] = x[j, 2] + sz
                         bj[ncand] = j
                         bf[ncand] = frozen[j]
-                        ncand += 1
+                        ncand += ONE
             for i in range(start[c], start[c + 1]):
                 xi = x[i, 0]
                 yi = x[i, 1]
@@ -427,18 +433,19 @@ def build_half_list(
                     dy = yi - by[k]
                     dz = zi - bz[k]
                     r2[k] = dx * dx + dy * dy + dz * dz
-                count = 0
+                count = ZERO
                 if frozen[i]:
-                    for k in range(k0, ncand):
-                        rowbuf[count] = bj[k]
-                        count += (r2[k] < rlist2) & (not bf[k])
+                    for k in range(np.uint64(k0), ncand):
+                        rowbuf[count] = k
+                        count += np.uint64((r2[k] < rlist2) & (not bf[k]))
                 else:
-                    for k in range(k0, ncand):
-                        rowbuf[count] = bj[k]
-                        count += r2[k] < rlist2
+                    for k in range(np.uint64(k0), ncand):
+                        rowbuf[count] = k
+                        count += np.uint64(r2[k] < rlist2)
+                count = int(count)
                 m = min(count, maxnb)
                 for k in range(m):
-                    half[i, k] = rowbuf[k]
+                    half[i, k] = bj[np.uint64(rowbuf[k])]
                 nhalf[i] = m
                 need = max(need, count)
     return need
