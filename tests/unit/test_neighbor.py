@@ -132,8 +132,9 @@ def test_half_list_keeps_each_pair_once():
 @pytest.mark.usefixtures("serial_numba")
 @pytest.mark.parametrize("periodic_x", [True, False])
 def test_simulation_list_always_covers_rc(periodic_x):
-    """Verlet's guarantee: with rebuilds when an atom has moved skin/2, the list built at
-    x_ref holds every pair now closer than rc (checked after every few steps)."""
+    """Verlet's guarantee, kept by the pair-by-pair test (``list_holds``) that replaces
+    Verlet's rebuild at skin/2: the list built at x_ref holds every pair now closer than rc
+    (checked after every few steps)."""
     st = fcc_state((3, 3, 3), 0.8, 2.0, 4, periodic_x=periodic_x)
     sim = MDSimulation(st, LJParams(rc=2.2, skin=0.3), dt=0.005)
     s = sim.state
@@ -245,3 +246,75 @@ def test_half_list_leaves_out_only_the_pairs_inside_the_inflow_copy(direct):
         dropped += n0[i] - len(kept)
         assert list(h1[i, : n1[i]]) == kept
     assert dropped > 0
+
+
+# (box, periodic flags, shift along x): the shift is a uniform drift of every atom along a
+# bounded x (the window frame's reference drift), which changes no pair distance.
+HOLD_BOXES = {
+    "periodic": ((8.7, 9.0, 11.5), (True, True, True), 0.0),
+    "walled-x": ((9.0, 8.5, 8.7), (False, True, True), 0.0),
+    "walled-x-drifting": ((9.0, 8.5, 8.7), (False, True, True), 0.37),
+    "walled-x-and-z": ((9.0, 8.5, 7.0), (False, True, False), 0.0),
+}
+
+
+@pytest.mark.parametrize("box", list(HOLD_BOXES))
+def test_list_holds_only_while_no_unlisted_pair_is_within_rc(box):
+    """``list_holds`` against brute force: whenever it keeps the list, every pair now closer
+    than rc was closer than rlist at the build (exact sets, all pairs, minimum image). The
+    displacements are drawn so that Verlet's rule (rebuild once an atom has moved skin/2)
+    would rebuild in every trial; the test also asks that the pair bound keeps the list in
+    some of them and that the brute force finds a pair come within rc in some others (so
+    that both answers are exercised)."""
+    from hugomap.md.neighbor import list_holds
+
+    rc, skin = 2.5, 0.3
+    rlist = rc + skin
+    L, periodic, shift = HOLD_BOXES[box]
+    x0, L = _gas(L, density=0.5, seed=7)
+    periodic = np.array(periodic)
+    nc = grid_shape(L, rlist)
+    start = counting_sort(cell_of(x0, L, nc), int(np.prod(nc)))[1]
+    x_ref = np.ascontiguousarray(x0[np.argsort(cell_of(x0, L, nc), kind="stable")])
+    listed = ref.pair_set(x_ref, L, periodic, rlist)
+    rng = np.random.default_rng(11)
+    kept = broken = 0
+    for trial in range(40 if ref.NO_JIT else 200):
+        # Most atoms move a little; a few move between skin/2 and skin.
+        u = rng.normal(size=x_ref.shape)
+        u /= np.linalg.norm(u, axis=1)[:, None]
+        mag = rng.uniform(0.0, 0.1, len(x_ref))
+        fast = rng.choice(len(x_ref), size=1 + trial % 6, replace=False)
+        mag[fast] = rng.uniform(0.5 * skin * 1.01, skin, fast.size)
+        x = x_ref + mag[:, None] * u
+        x[:, 0] += shift
+        for d in range(3):
+            if periodic[d]:
+                x[:, d] %= L[d]
+        holds = list_holds(x, x_ref, shift, L, periodic, nc, start, rc, rlist)
+        now = ref.pair_set(x, L, periodic, rc)
+        if holds:
+            kept += 1
+            assert now <= listed, f"trial {trial}: a pair within rc is not in the list"
+        broken += not now <= listed
+    assert kept > 0 and broken > 0, (kept, broken)
+
+
+def test_list_holds_refuses_moves_of_skin_and_more():
+    """An atom that has moved a whole skin, however alone, sends the list to a rebuild (the
+    search stencil is sized for moves below skin)."""
+    from hugomap.md.neighbor import list_holds
+
+    rc, rlist = 2.5, 2.8
+    L = np.array([9.0, 9.0, 9.0])
+    periodic = np.array([True, True, True])
+    x_ref = np.array([[1.0, 1.0, 1.0], [6.0, 6.0, 6.0]])
+    nc = grid_shape(L, rlist)
+    order = np.argsort(cell_of(x_ref, L, nc), kind="stable")
+    x_ref = np.ascontiguousarray(x_ref[order])
+    start = counting_sort(cell_of(x_ref, L, nc), int(np.prod(nc)))[1]
+    x = x_ref.copy()
+    x[0, 0] += 0.29
+    assert list_holds(x, x_ref, 0.0, L, periodic, nc, start, rc, rlist)
+    x[0, 0] += 0.02
+    assert not list_holds(x, x_ref, 0.0, L, periodic, nc, start, rc, rlist)

@@ -32,8 +32,10 @@ from .neighbor import (
     build_half_list,
     cell_of,
     counting_sort,
+    displacement2,
     half_from_full_rowless,
     half_stencil_ok,
+    list_holds,
 )
 
 OK, GROW, NAN, CFL, LOST = 0, 1, 2, 3, 4
@@ -99,17 +101,12 @@ def drift_walls_wrap(
                 impulse[1] += 2.0 * (vr - v[i, 0])
                 x[i, 0] = 2.0 * xr - x[i, 0]
                 v[i, 0] = 2.0 * vr - v[i, 0]
-        d2 = 0.0
         for d in range(3):
             if periodic[d]:
                 x[i, d] -= L[d] * np.floor(x[i, d] / L[d])
-                dd = x[i, d] - x_ref[i, d]
-                dd -= L[d] * np.rint(dd / L[d])
-            else:
-                dd = x[i, d] - x_ref[i, d] - (shift_x if d == 0 else 0.0)
-            d2 += dd * dd
             if not (x[i, d] >= 0.0 and x[i, d] <= L[d]):
                 bad = 1
+        d2 = displacement2(x, x_ref, i, L, periodic, shift_x)
         if d2 > max_d2:
             max_d2 = d2
     return max_d2, max_step2, bad
@@ -185,13 +182,14 @@ def rebuild(
     half: np.ndarray,
     nhalf: np.ndarray,
     rowless: int,
+    start: np.ndarray,
 ) -> int:
-    """Sort atoms by cell, build the list (``build_lists``), remember x_ref; return the row
-    need. ``rowless``: frozen atoms with ids −1 … −rowless keep no row (``drop_rows``). (No
+    """Sort atoms by cell, build the list (``build_lists``), remember x_ref and the cell
+    offsets (``start``, for ``list_holds``); return the row need. ``rowless``: frozen atoms with ids −1 … −rowless keep no row (``drop_rows``). (No
     literal flag among the arguments: called with a constant True from jitted code and
     with a bool from Python, numba compiled and cached two overloads, and a process that
     loaded the second from the cache called a null pointer.)"""
-    start = sort_by_cell(x, v, f, ids, L, nc)
+    start[:] = sort_by_cell(x, v, f, ids, L, nc)
     need = build_lists(
         x, ids, L, periodic, nc, start, rlist2, nbr, nnb, use_half, half, nhalf, rowless
     )
@@ -288,14 +286,17 @@ def run_steps(
     counters: np.ndarray,
     ref: np.ndarray,
     rowless: int,
+    start: np.ndarray,
 ) -> tuple[int, int]:
     """Advance up to ``nsteps`` velocity-Verlet steps; return (steps completed, status).
 
-    ``ref`` = [v_ref, shift]: the list is rebuilt when an atom has moved skin/2 relative to a
-    uniform drift at v_ref along x (shift = v_ref × time since the last build). A uniform
-    drift does not change any pair distance, so the list stays valid (Verlet's bound holds
-    for displacements relative to any common shift) while, in a window frame where all the
-    material streams at ~D, the list is not rebuilt every few steps.
+    ``ref`` = [v_ref, shift]: displacements count relative to a uniform drift at v_ref along
+    x (shift = v_ref × time since the last build). A uniform drift does not change any pair
+    distance, so the list stays valid (Verlet's bound holds for displacements relative to
+    any common shift) while, in a window frame where all the material streams at ~D, the
+    list is not rebuilt every few steps. Once an atom has moved skin/2 (Verlet's rule) the
+    list is tested pair by pair (``list_holds``, on the build's cell offsets ``start``) and
+    rebuilt only when some pair could have come within rc unlisted.
     ``walls0`` = [x_L0, v_L, x_R0, v_R]: wall positions at t = 0 and their velocities, so the
     wall position at time t is x_w0 + v_w t, with t = t_epoch + k Δt at step k counted from the
     epoch (``k0`` steps done so far): the same floats however the run is split. ``thermo`` = [T, τ, N_f]
@@ -321,10 +322,12 @@ def run_steps(
             return s, CFL
         if bad:
             return s, LOST
-        if max_d2 > half_skin2:
+        if max_d2 > half_skin2 and not list_holds(
+            x, x_ref, ref[1], L, periodic, nc, start, np.sqrt(rc2), np.sqrt(rlist2)
+        ):
             need = rebuild(
                 x, v, f, ids, x_ref, L, periodic, nc, rlist2, nbr, nnb, use_half, half, nhalf,
-                rowless,
+                rowless, start,
             )  # fmt: skip
             counters[0] += 1
             ref[1] = 0.0

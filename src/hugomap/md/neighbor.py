@@ -5,8 +5,10 @@ At every rebuild the atoms are counting-sorted by cell (cells of side ≥ (rc + 
 5 × 5 × 5 stencil), so that atoms close in space are close in memory, and a *full* list (both
 i→j and j→i) is built row by row: row i is written only by the thread that owns i's cell, and
 its order depends only on the positions, so the build and the forces are deterministic for
-any thread count (which the bit-exact checkpoint resume relies on). The list radius is rc + skin; it is
-rebuilt when an atom has moved more than skin/2 since the last build (see ``integrate``).
+any thread count (which the bit-exact checkpoint resume relies on). The list radius is rc + skin; once an
+atom has moved more than skin/2 since the last build (Verlet's rule), ``list_holds`` tests
+the list pair by pair, and it is rebuilt when a pair may have come within rc unlisted (see
+``integrate``).
 """
 
 from __future__ import annotations
@@ -31,6 +33,12 @@ def grid_shape(L: np.ndarray, rlist: float) -> np.ndarray:
 
 
 @njit
+def cell_coord(xd: float, Ld: float, ncd: int) -> int:
+    """The cell (0 … ncd − 1) of coordinate ``xd`` [σ] along a dimension of length ``Ld``."""
+    return min(max(int(xd / Ld * ncd), 0), ncd - 1)
+
+
+@njit
 def cell_of(x: np.ndarray, L: np.ndarray, nc: np.ndarray) -> np.ndarray:
     """Linear cell index (x fastest) of every atom; positions are assumed inside the box."""
     n = x.shape[0]
@@ -39,12 +47,109 @@ def cell_of(x: np.ndarray, L: np.ndarray, nc: np.ndarray) -> np.ndarray:
         c = 0
         stride = 1
         for d in range(3):
-            k = int(x[i, d] / L[d] * nc[d])
-            k = min(max(k, 0), nc[d] - 1)
-            c += k * stride
+            c += cell_coord(x[i, d], L[d], nc[d]) * stride
             stride *= nc[d]
         cell[i] = c
     return cell
+
+
+@njit
+def displacement2(
+    x: np.ndarray, x_ref: np.ndarray, i: int, L: np.ndarray, periodic: np.ndarray, shift_x: float
+) -> float:
+    """|Δ_i|² [σ²]: atom i's displacement since the list was built at ``x_ref``, the minimum
+    image in periodic dimensions, less a uniform ``shift_x`` along a bounded x (a uniform
+    drift changes no pair distance: ``integrate.run_steps``)."""
+    d2 = 0.0
+    for d in range(3):
+        if periodic[d]:
+            dd = x[i, d] - x_ref[i, d]
+            dd -= L[d] * np.rint(dd / L[d])
+        else:
+            dd = x[i, d] - x_ref[i, d] - (shift_x if d == 0 else 0.0)
+        d2 += dd * dd
+    return d2
+
+
+@njit
+def list_holds(
+    x: np.ndarray,
+    x_ref: np.ndarray,
+    shift_x: float,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    nc: np.ndarray,
+    start: np.ndarray,
+    rc: float,
+    rlist: float,
+) -> bool:
+    """Whether the list built at ``x_ref`` still holds every pair closer than rc at ``x``.
+
+    Verlet's rule (rebuild once an atom has moved skin/2, skin = rlist − rc) is a bound
+    for the worst pair, two atoms that both moved that far towards each other. This is the
+    bound pair by pair: a pair left out of the list had r₀ ≥ rlist at the build, and at
+    ``x`` it is at least r₀ − |Δ_i| − |Δ_j| apart (``displacement2``), so the list holds
+    while r₀ − |Δ_i| − |Δ_j| ≥ rc for every such pair. Only a pair with |Δ_i| + |Δ_j| >
+    skin can fail, so one of its atoms has moved more than skin/2: the test runs over those
+    atoms and the atoms that were within rc + |Δ_i| + max|Δ| of them at the build, found
+    in the build's cells (``x_ref`` sorted by cell, atoms of cell c at start[c]:start[c+1]).
+    Exact up to rounding, which it resolves towards a rebuild. Returns False (rebuild) once
+    an atom has moved skin or the search would reach half a periodic box.
+    """
+    n = x.shape[0]
+    skin = rlist - rc
+    disp = np.empty(n)
+    dmax = 0.0
+    for i in range(n):
+        disp[i] = np.sqrt(displacement2(x, x_ref, i, L, periodic, shift_x))
+        dmax = max(dmax, disp[i])
+    if not dmax < skin:  # also NaN
+        return False
+    reach_r = rc + 2.0 * dmax
+    reach = np.empty(3, dtype=np.int64)
+    for d in range(3):
+        if periodic[d] and not reach_r < 0.5 * L[d]:
+            return False
+        reach[d] = int(reach_r / (L[d] / nc[d])) + 1
+    # Pairs closer than this at the build are in the list (the margin sends a pair at the
+    # edge, where the build's rounding may have differed, to the test).
+    in_list2 = rlist * rlist * (1.0 - 1e-10)
+    nx = nc[0]
+    ny = nc[1]
+    ci = np.empty(3, dtype=np.int64)
+    lo = np.empty(3, dtype=np.int64)
+    hi = np.empty(3, dtype=np.int64)
+    for i in range(n):
+        if disp[i] <= 0.5 * skin:
+            continue
+        for d in range(3):
+            ci[d] = cell_coord(x_ref[i, d], L[d], nc[d])
+            if periodic[d] and 2 * reach[d] + 1 >= nc[d]:
+                lo[d], hi[d] = 0, nc[d] - 1  # once round
+            elif periodic[d]:
+                lo[d], hi[d] = ci[d] - reach[d], ci[d] + reach[d]
+            else:
+                lo[d], hi[d] = max(ci[d] - reach[d], 0), min(ci[d] + reach[d], nc[d] - 1)
+        for kz in range(lo[2], hi[2] + 1):
+            cz = kz % nc[2]
+            for ky in range(lo[1], hi[1] + 1):
+                cy = ky % ny
+                for kx in range(lo[0], hi[0] + 1):
+                    c = kx % nx + nx * (cy + ny * cz)
+                    for j in range(start[c], start[c + 1]):
+                        if disp[i] + disp[j] <= skin:
+                            continue
+                        r2 = 0.0
+                        for d in range(3):
+                            dd = x_ref[j, d] - x_ref[i, d]
+                            if periodic[d]:
+                                dd -= L[d] * np.rint(dd / L[d])
+                            r2 += dd * dd
+                        if r2 < in_list2:
+                            continue
+                        if np.sqrt(r2) - disp[i] - disp[j] < rc:
+                            return False
+    return True
 
 
 @njit

@@ -113,18 +113,22 @@ class MDSimulation:
             self._alloc_lists(max(ig.list_width(self.nbr, self.half), 16))
         if sort:
             s.ref_shift = 0.0
+        # The build's cell offsets, kept for the run's pair-by-pair list test.
+        self.start = np.zeros(int(np.prod(self.nc)) + 1, dtype=np.int64)
         while True:
             if sort:
                 need = ig.rebuild(
                     s.x, s.v, s.f, s.ids, s.x_ref, s.L, s.periodic, self.nc,
                     self.lj.rlist**2, self.nbr, self.nnb, self.use_half, self.half, self.nhalf,
-                    self.rowless,
+                    self.rowless, self.start,
                 )  # fmt: skip
                 sort = False
             else:
-                start = counting_sort(cell_of(s.x_ref, s.L, self.nc), int(np.prod(self.nc)))[1]
+                self.start[:] = counting_sort(cell_of(s.x_ref, s.L, self.nc), self.start.size - 1)[
+                    1
+                ]
                 need = ig.build_lists(
-                    s.x_ref, s.ids, s.L, s.periodic, self.nc, start, self.lj.rlist**2,
+                    s.x_ref, s.ids, s.L, s.periodic, self.nc, self.start, self.lj.rlist**2,
                     self.nbr, self.nnb, self.use_half, self.half, self.nhalf, self.rowless,
                 )  # fmt: skip
             if need <= ig.list_width(self.nbr, self.half):
@@ -204,6 +208,7 @@ class MDSimulation:
                 s.epoch_time, s.step - s.epoch_step, self.dt, self.lj.rc**2, self.lj.rlist**2, (0.5 * self.lj.skin) ** 2,
                 self.nc, self.nbr, self.nnb, self.use_half, self.half, self.nhalf, self.fbuf,
                 s.impulse, thermo, r1[done_total:], chi[done_total:], counters, ref, self.rowless,
+                self.start,
             )  # fmt: skip
             s.ref_shift = float(ref[1])
             s.step += done
