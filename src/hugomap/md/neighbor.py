@@ -94,23 +94,33 @@ def list_holds(
     atoms and the atoms that were within rc + |Δ_i| + max|Δ| of them at the build, found
     in the build's cells (``x_ref`` sorted by cell, atoms of cell c at start[c]:start[c+1]).
     Exact up to rounding, which it resolves towards a rebuild. Returns False (rebuild) once
-    an atom has moved skin or the search would reach half a periodic box.
+    an atom has moved skin, or the search would reach half a periodic box or cost more than
+    ``SEARCH_BUDGET`` allows.
     """
     n = x.shape[0]
     skin = rlist - rc
     disp = np.empty(n)
     dmax = 0.0
+    moved = 0
     for i in range(n):
         disp[i] = np.sqrt(displacement2(x, x_ref, i, L, periodic, shift_x))
         dmax = max(dmax, disp[i])
+        moved += disp[i] > 0.5 * skin
     if not dmax < skin:  # also NaN
         return False
     reach_r = rc + 2.0 * dmax
     reach = np.empty(3, dtype=np.int64)
+    share = 1.0  # the share of the atoms searched around each moved atom
     for d in range(3):
         if periodic[d] and not reach_r < 0.5 * L[d]:
             return False
         reach[d] = int(reach_r / (L[d] / nc[d])) + 1
+        share *= min(1.0, (2 * reach[d] + 1) / nc[d])
+    # A dear search is not worth it (``SEARCH_BUDGET``): a region moving as a whole (a
+    # piston's shocked slab in the lab frame) has every atom past skin/2 at once, and a
+    # build finds its pairs again faster.
+    if moved * share > SEARCH_BUDGET:
+        return False
     # Pairs closer than this at the build are in the list (the margin sends a pair at the
     # edge, where the build's rounding may have differed, to the test).
     in_list2 = rlist * rlist * (1.0 - 1e-10)
@@ -175,6 +185,11 @@ REACH = 2  # stencil half-width in cells (bins of side ≥ rlist/2)
 # negative values (Python's wraparound) at every access, which an unsigned one skips.
 ZERO = np.uint64(0)
 ONE = np.uint64(1)
+# ``list_holds`` runs at every step from the first atom past skin/2 until it fails, so its
+# search around the moved atoms is held to this many atom visits per atom of the system (a
+# force evaluation visits ~38 list pairs an atom on bench/in.lj, a build ~150 candidates);
+# past it, a rebuild.
+SEARCH_BUDGET = 8.0
 
 
 @njit
