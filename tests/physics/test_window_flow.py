@@ -131,9 +131,13 @@ def test_absorbing_outflow_holds_the_flow_and_resumes_bit_for_bit(flow, tmp_path
     moves at u_out − (P_fast − P_slow)/Z. References: in a uniform steady flow the pressure on
     the boundary is the bulk's, the reservoir's NVE P0 (``make_reservoir``'s pole; its block
     error ~0.04, the face's average over 4 τ scatters ~1 %: 3 % bound); the layer then moves
-    at u_out on average (0.05 σ/τ bound, the thermal noise of the whole window's mean
-    velocity) and the density is kept as by the rigid outflow (2 %, as above). A layer
-    driven the wrong way (δu = +δP/Z) runs away: |u_face − u_out| grows past 1 σ/τ."""
+    at u_out on average and the density is kept as by the rigid outflow (2 %, as above). The
+    layer's mean deviation over these 4 τ is slaved to the face pressure's fluctuations
+    (0.5 τ average, about 8 independent values): its mean scattered by 0.038 σ/τ between
+    nine independent runs of this set-up (four seeds of sample and reservoir under two
+    list-rebuild rules, and this test's seed on 2 threads), so the bound is 0.12 σ/τ, three
+    of those standard deviations (2 % of V: a biased layer moves further). A layer driven
+    the wrong way (δu = +δP/Z) runs away: |u_face − u_out| grows past 1 σ/τ."""
     from hugomap.md.window import MDWindow
 
     flow["win"].save(tmp_path / "w0.nc")
@@ -148,7 +152,7 @@ def test_absorbing_outflow_holds_the_flow_and_resumes_bit_for_bit(flow, tmp_path
         dev.append(win.u_face - win.u_out)
         dens.append(region_state(win.profile_sums(1.0), edges, g.x_lo, g.x_hi, win.area)["n"])
     assert abs(win.p_slow / p0 - 1) < 0.03, (win.p_slow, p0)
-    assert abs(np.mean(dev)) < 0.05 and np.max(np.abs(dev)) < 1.0, (np.mean(dev), np.max(dev))
+    assert abs(np.mean(dev)) < 0.12 and np.max(np.abs(dev)) < 1.0, (np.mean(dev), np.max(dev))
     assert abs(np.mean(dens) / RHO0 - 1) < 0.02, np.mean(dens)
     win.save(tmp_path / "w1.nc")
     b = MDWindow.load_path(tmp_path / "w1.nc")
