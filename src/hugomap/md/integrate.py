@@ -185,10 +185,11 @@ def rebuild(
     start: np.ndarray,
 ) -> int:
     """Sort atoms by cell, build the list (``build_lists``), remember x_ref and the cell
-    offsets (``start``, for ``list_holds``); return the row need. ``rowless``: frozen atoms with ids −1 … −rowless keep no row (``drop_rows``). (No
-    literal flag among the arguments: called with a constant True from jitted code and
-    with a bool from Python, numba compiled and cached two overloads, and a process that
-    loaded the second from the cache called a null pointer.)"""
+    offsets (``start``, for ``list_holds``); return the row need. ``rowless``: frozen atoms
+    with ids −1 … −rowless keep no row (``drop_rows``). (No literal flag among the
+    arguments: called with a constant True from jitted code and with a bool from Python,
+    numba compiled and cached two overloads, and a process that loaded the second from the
+    cache called a null pointer.)"""
     start[:] = sort_by_cell(x, v, f, ids, L, nc)
     need = build_lists(
         x, ids, L, periodic, nc, start, rlist2, nbr, nnb, use_half, half, nhalf, rowless

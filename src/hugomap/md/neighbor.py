@@ -5,10 +5,10 @@ At every rebuild the atoms are counting-sorted by cell (cells of side ≥ (rc + 
 5 × 5 × 5 stencil), so that atoms close in space are close in memory, and a *full* list (both
 i→j and j→i) is built row by row: row i is written only by the thread that owns i's cell, and
 its order depends only on the positions, so the build and the forces are deterministic for
-any thread count (which the bit-exact checkpoint resume relies on). The list radius is rc + skin; once an
-atom has moved more than skin/2 since the last build (Verlet's rule), ``list_holds`` tests
-the list pair by pair, and it is rebuilt when a pair may have come within rc unlisted (see
-``integrate``).
+any thread count (which the bit-exact checkpoint resume relies on). The list radius is
+rc + skin; once an atom has moved more than skin/2 since the last build (Verlet's rule),
+``list_holds`` tests the list pair by pair, and it is rebuilt when a pair may have come
+within rc unlisted (see ``integrate``).
 """
 
 from __future__ import annotations
