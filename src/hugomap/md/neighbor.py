@@ -109,13 +109,17 @@ def list_holds(
     if not dmax < skin:  # also NaN
         return False
     reach_r = rc + 2.0 * dmax
-    reach = np.empty(3, dtype=np.int64)
-    share = 1.0  # the share of the atoms searched around each moved atom
     for d in range(3):
         if periodic[d] and not reach_r < 0.5 * L[d]:
             return False
-        reach[d] = int(reach_r / (L[d] / nc[d])) + 1
-        share *= min(1.0, (2 * reach[d] + 1) / nc[d])
+    nx = nc[0]
+    ny = nc[1]
+    nz = nc[2]
+    ox = _offsets(nx, periodic[0], int(reach_r / (L[0] / nx)) + 1)
+    oy = _offsets(ny, periodic[1], int(reach_r / (L[1] / ny)) + 1)
+    oz = _offsets(nz, periodic[2], int(reach_r / (L[2] / nz)) + 1)
+    # The share of the atoms searched around each moved atom.
+    share = min(1.0, ox.size / nx) * min(1.0, oy.size / ny) * min(1.0, oz.size / nz)
     # A dear search is not worth it (``SEARCH_BUDGET``): a region moving as a whole (a
     # piston's shocked slab in the lab frame) has every atom past skin/2 at once, and a
     # build finds its pairs again faster.
@@ -124,28 +128,31 @@ def list_holds(
     # Pairs closer than this at the build are in the list (the margin sends a pair at the
     # edge, where the build's rounding may have differed, to the test).
     in_list2 = rlist * rlist * (1.0 - 1e-10)
-    nx = nc[0]
-    ny = nc[1]
-    ci = np.empty(3, dtype=np.int64)
-    lo = np.empty(3, dtype=np.int64)
-    hi = np.empty(3, dtype=np.int64)
     for i in range(n):
         if disp[i] <= 0.5 * skin:
             continue
-        for d in range(3):
-            ci[d] = cell_coord(x_ref[i, d], L[d], nc[d])
-            if periodic[d] and 2 * reach[d] + 1 >= nc[d]:
-                lo[d], hi[d] = 0, nc[d] - 1  # once round
-            elif periodic[d]:
-                lo[d], hi[d] = ci[d] - reach[d], ci[d] + reach[d]
-            else:
-                lo[d], hi[d] = max(ci[d] - reach[d], 0), min(ci[d] + reach[d], nc[d] - 1)
-        for kz in range(lo[2], hi[2] + 1):
-            cz = kz % nc[2]
-            for ky in range(lo[1], hi[1] + 1):
-                cy = ky % ny
-                for kx in range(lo[0], hi[0] + 1):
-                    c = kx % nx + nx * (cy + ny * cz)
+        ix = cell_coord(x_ref[i, 0], L[0], nx)
+        iy = cell_coord(x_ref[i, 1], L[1], ny)
+        iz = cell_coord(x_ref[i, 2], L[2], nz)
+        for a in oz:
+            cz = iz + a
+            if periodic[2]:
+                cz %= nz
+            elif cz < 0 or cz >= nz:
+                continue
+            for b in oy:
+                cy = iy + b
+                if periodic[1]:
+                    cy %= ny
+                elif cy < 0 or cy >= ny:
+                    continue
+                for e in ox:
+                    cx = ix + e
+                    if periodic[0]:
+                        cx %= nx
+                    elif cx < 0 or cx >= nx:
+                        continue
+                    c = cx + nx * (cy + ny * cz)
                     for j in range(start[c], start[c + 1]):
                         if disp[i] + disp[j] <= skin:
                             continue
@@ -193,13 +200,13 @@ SEARCH_BUDGET = 8.0
 
 
 @njit
-def _offsets(n: int, periodic: bool) -> np.ndarray:
-    # Neighbour-cell offsets along one dimension; a periodic dimension with fewer than
-    # 2 REACH + 1 cells is walked once round (every cell once), never a cell twice.
-    if periodic and n < 2 * REACH + 1:
+def _offsets(n: int, periodic: bool, reach: int) -> np.ndarray:
+    # Neighbour-cell offsets along one dimension, −reach … reach; a periodic dimension with
+    # fewer than 2 reach + 1 cells is walked once round (every cell once), never a cell twice.
+    if periodic and n < 2 * reach + 1:
         lo = -(n // 2)
         return np.arange(lo, lo + n).astype(np.int64)
-    return np.arange(-REACH, REACH + 1).astype(np.int64)
+    return np.arange(-reach, reach + 1).astype(np.int64)
 
 
 @pjit
@@ -248,9 +255,9 @@ def build_full_list(
     shift_x = periodic[0] and Lr[0] == 0.0
     shift_y = periodic[1] and Lr[1] == 0.0
     shift_z = periodic[2] and Lr[2] == 0.0
-    oy = _offsets(ny, periodic[1])
-    oz = _offsets(nz, periodic[2])
-    ox = _offsets(nx, periodic[0])
+    oy = _offsets(ny, periodic[1], REACH)
+    oz = _offsets(nz, periodic[2], REACH)
+    ox = _offsets(nx, periodic[0], REACH)
     # Room for the candidates of any cell: stencil cells times the fullest cell.
     fullest = 1
     for c in range(ncell):
@@ -362,12 +369,11 @@ def build_full_list(
                 for k in range(ncand):
                     rowbuf[count] = k
                     count += np.uint64(r2[k] < rlist2)
-                count = int(count)
-                m = min(count, maxnb)
+                m = min(int(count), maxnb)
                 for k in range(m):
                     nbr[i, k] = bj[np.uint64(rowbuf[k])]
                 nnb[i] = m
-                need = max(need, count)
+                need = max(need, int(count))
     return need
 
 
@@ -562,10 +568,9 @@ def build_half_list(
                     for k in range(np.uint64(k0), ncand):
                         rowbuf[count] = k
                         count += np.uint64(r2[k] < rlist2)
-                count = int(count)
-                m = min(count, maxnb)
+                m = min(int(count), maxnb)
                 for k in range(m):
                     half[i, k] = bj[np.uint64(rowbuf[k])]
                 nhalf[i] = m
-                need = max(need, count)
+                need = max(need, int(count))
     return need
