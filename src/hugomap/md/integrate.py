@@ -102,8 +102,13 @@ def drift_walls_wrap(
                 x[i, 0] = 2.0 * xr - x[i, 0]
                 v[i, 0] = 2.0 * vr - v[i, 0]
         for d in range(3):
+            # an atom crosses at most one periodic face a step (its move is below skin/2, the
+            # step is refused otherwise), so a branch wraps it: no division on every atom
             if periodic[d]:
-                x[i, d] -= L[d] * np.floor(x[i, d] / L[d])
+                if x[i, d] >= L[d]:
+                    x[i, d] -= L[d]
+                elif x[i, d] < 0.0:
+                    x[i, d] += L[d]
             if not (x[i, d] >= 0.0 and x[i, d] <= L[d]):
                 bad = 1
         d2 = displacement2(x, x_ref, i, L, periodic, shift_x)

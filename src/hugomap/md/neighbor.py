@@ -63,8 +63,13 @@ def displacement2(
     d2 = 0.0
     for d in range(3):
         if periodic[d]:
+            # both ends lie in [0, L], so one image shift at most; a branch, not rint(dd / L):
+            # the division was most of the cost of a step's displacement pass
             dd = x[i, d] - x_ref[i, d]
-            dd -= L[d] * np.rint(dd / L[d])
+            if dd > 0.5 * L[d]:
+                dd -= L[d]
+            elif dd < -0.5 * L[d]:
+                dd += L[d]
         else:
             dd = x[i, d] - x_ref[i, d] - (shift_x if d == 0 else 0.0)
         d2 += dd * dd
