@@ -124,10 +124,18 @@ def sort_by_cell(
     """Reorder atoms by cell (stable counting sort) in place; return the cell offsets."""
     cell = cell_of(x, L, nc)
     order, start = counting_sort(cell, nc[0] * nc[1] * nc[2])
-    x[:] = x[order]
-    v[:] = v[order]
-    f[:] = f[order]
-    ids[:] = ids[order]
+    # Plain loops, not x[:] = x[order]: the fancy index's shape checks took numba seconds
+    # to compile, at the first run of every fresh install.
+    tmp = np.empty(x.shape[0])
+    for a in (x, v, f):
+        for d in range(3):
+            for i in range(x.shape[0]):
+                tmp[i] = a[order[i], d]
+            for i in range(x.shape[0]):
+                a[i, d] = tmp[i]
+    ids_old = ids.copy()
+    for i in range(ids.shape[0]):
+        ids[i] = ids_old[order[i]]
     return start
 
 

@@ -202,6 +202,11 @@ ONE = np.uint64(1)
 # force evaluation visits ~38 list pairs an atom on bench/in.lj, a build ~150 candidates);
 # past it, a rebuild.
 SEARCH_BUDGET = 8.0
+# The builds share cells out among the threads in blocks of this many (x fastest), each
+# block's rows built by one call (``_full_block``, ``_half_block``): a call per block costs
+# nothing beside its cells' work, and numba compiles a ``prange`` loop that only calls much
+# faster than one holding the whole build.
+BLOCK = 32
 
 
 @njit
@@ -245,7 +250,6 @@ def build_full_list(
     Returns the largest row length needed; if it exceeds ``nbr.shape[1]`` the rows were cut
     and the caller must grow ``nbr`` and build again.
     """
-    maxnb = nbr.shape[1]
     nx = nc[0]
     ny = nc[1]
     nz = nc[2]
@@ -256,10 +260,6 @@ def build_full_list(
         invL[d] = 1.0 / L[d]
         if periodic[d] and nc[d] < 2 * REACH + 1:
             Lr[d] = L[d]
-    wrap = Lr[0] + Lr[1] + Lr[2] > 0.0
-    shift_x = periodic[0] and Lr[0] == 0.0
-    shift_y = periodic[1] and Lr[1] == 0.0
-    shift_z = periodic[2] and Lr[2] == 0.0
     oy = _offsets(ny, periodic[1], REACH)
     oz = _offsets(nz, periodic[2], REACH)
     ox = _offsets(nx, periodic[0], REACH)
@@ -268,117 +268,152 @@ def build_full_list(
     for c in range(ncell):
         fullest = max(fullest, start[c + 1] - start[c])
     cap = ox.size * oy.size * oz.size * fullest
-    block = 32
-    nblock = (ncell + block - 1) // block
-    need = 0
+    nblock = (ncell + BLOCK - 1) // BLOCK
+    needs = np.zeros(nblock, dtype=np.int64)
     for blk in prange(nblock):
-        bx = np.empty(cap)
-        by = np.empty(cap)
-        bz = np.empty(cap)
-        bj = np.empty(cap, dtype=np.int32)
-        r2 = np.empty(cap)
-        rowbuf = np.empty(cap, dtype=np.int32)
-        for c in range(blk * block, min(ncell, (blk + 1) * block)):
-            if start[c + 1] == start[c]:
-                continue
-            cx = c % nx
-            cy = (c // nx) % ny
-            cz = c // (nx * ny)
-            # The runs of cells along x: up to two (a periodic run that wraps is split).
-            if periodic[0] and not shift_x:
-                xlo0, xhi0, sx0 = 0, nx - 1, 0.0
-                xlo1, xhi1, sx1 = 0, -1, 0.0
-            elif periodic[0]:
-                lo = cx - REACH
-                hi = cx + REACH
-                if lo < 0:
-                    xlo0, xhi0, sx0 = lo + nx, nx - 1, -L[0]
-                    xlo1, xhi1, sx1 = 0, hi, 0.0
-                elif hi >= nx:
-                    xlo0, xhi0, sx0 = lo, nx - 1, 0.0
-                    xlo1, xhi1, sx1 = 0, hi - nx, L[0]
-                else:
-                    xlo0, xhi0, sx0 = lo, hi, 0.0
-                    xlo1, xhi1, sx1 = 0, -1, 0.0
+        needs[blk] = _full_block(blk, cap, x, L, periodic, nc, start, rlist2, nbr, nnb, Lr, invL,
+                                 oy, oz)  # fmt: skip
+    return needs.max() if nblock > 0 else 0
+
+
+@njit
+def _full_block(
+    blk: int,
+    cap: int,
+    x: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    nc: np.ndarray,
+    start: np.ndarray,
+    rlist2: float,
+    nbr: np.ndarray,
+    nnb: np.ndarray,
+    Lr: np.ndarray,
+    invL: np.ndarray,
+    oy: np.ndarray,
+    oz: np.ndarray,
+) -> int:
+    """``build_full_list``'s rows of the cells of block ``blk`` (``BLOCK`` cells), with
+    candidate buffers of ``cap`` entries; ``Lr`` holds L_d along the periodic dimensions too
+    short for the stencil (a per-pair minimum image there, with ``invL`` = 1/L), ``oy`` and
+    ``oz`` the cell offsets (``_offsets``). Returns the block's largest row need."""
+    maxnb = nbr.shape[1]
+    nx = nc[0]
+    ny = nc[1]
+    nz = nc[2]
+    ncell = nx * ny * nz
+    wrap = Lr[0] + Lr[1] + Lr[2] > 0.0
+    shift_x = periodic[0] and Lr[0] == 0.0
+    shift_y = periodic[1] and Lr[1] == 0.0
+    shift_z = periodic[2] and Lr[2] == 0.0
+    need = 0
+    bx = np.empty(cap)
+    by = np.empty(cap)
+    bz = np.empty(cap)
+    bj = np.empty(cap, dtype=np.int32)
+    r2 = np.empty(cap)
+    rowbuf = np.empty(cap, dtype=np.int32)
+    for c in range(blk * BLOCK, min(ncell, (blk + 1) * BLOCK)):
+        if start[c + 1] == start[c]:
+            continue
+        cx = c % nx
+        cy = (c // nx) % ny
+        cz = c // (nx * ny)
+        # The runs of cells along x: up to two (a periodic run that wraps is split).
+        if periodic[0] and not shift_x:
+            xlo0, xhi0, sx0 = 0, nx - 1, 0.0
+            xlo1, xhi1, sx1 = 0, -1, 0.0
+        elif periodic[0]:
+            lo = cx - REACH
+            hi = cx + REACH
+            if lo < 0:
+                xlo0, xhi0, sx0 = lo + nx, nx - 1, -L[0]
+                xlo1, xhi1, sx1 = 0, hi, 0.0
+            elif hi >= nx:
+                xlo0, xhi0, sx0 = lo, nx - 1, 0.0
+                xlo1, xhi1, sx1 = 0, hi - nx, L[0]
             else:
-                xlo0, xhi0, sx0 = max(cx - REACH, 0), min(cx + REACH, nx - 1), 0.0
+                xlo0, xhi0, sx0 = lo, hi, 0.0
                 xlo1, xhi1, sx1 = 0, -1, 0.0
-            # Gather the candidates, each at the periodic image seen from this cell.
-            ncand = ZERO
-            self0 = -1
-            for a in oz:
-                kz = cz + a
-                sz = 0.0
-                if periodic[2]:
-                    if kz < 0:
-                        kz += nz
-                        sz = -L[2] if shift_z else 0.0
-                    elif kz >= nz:
-                        kz -= nz
-                        sz = L[2] if shift_z else 0.0
-                elif kz < 0 or kz >= nz:
+        else:
+            xlo0, xhi0, sx0 = max(cx - REACH, 0), min(cx + REACH, nx - 1), 0.0
+            xlo1, xhi1, sx1 = 0, -1, 0.0
+        # Gather the candidates, each at the periodic image seen from this cell.
+        ncand = ZERO
+        self0 = -1
+        for a in oz:
+            kz = cz + a
+            sz = 0.0
+            if periodic[2]:
+                if kz < 0:
+                    kz += nz
+                    sz = -L[2] if shift_z else 0.0
+                elif kz >= nz:
+                    kz -= nz
+                    sz = L[2] if shift_z else 0.0
+            elif kz < 0 or kz >= nz:
+                continue
+            for b in oy:
+                ky = cy + b
+                sy = 0.0
+                if periodic[1]:
+                    if ky < 0:
+                        ky += ny
+                        sy = -L[1] if shift_y else 0.0
+                    elif ky >= ny:
+                        ky -= ny
+                        sy = L[1] if shift_y else 0.0
+                elif ky < 0 or ky >= ny:
                     continue
-                for b in oy:
-                    ky = cy + b
-                    sy = 0.0
-                    if periodic[1]:
-                        if ky < 0:
-                            ky += ny
-                            sy = -L[1] if shift_y else 0.0
-                        elif ky >= ny:
-                            ky -= ny
-                            sy = L[1] if shift_y else 0.0
-                    elif ky < 0 or ky >= ny:
-                        continue
-                    row = nx * (ky + ny * kz)
-                    for seg in range(2):
-                        if seg == 0:
-                            j0 = start[row + xlo0]
-                            j1 = start[row + xhi0 + 1]
-                            sx = sx0
-                        else:
-                            if xhi1 < xlo1:
-                                break
-                            j0 = start[row + xlo1]
-                            j1 = start[row + xhi1 + 1]
-                            sx = sx1
-                        if a == 0 and b == 0 and j0 <= start[c] < j1:
-                            self0 = int(ncand) + start[c] - j0
-                        for j in range(np.uint64(j0), np.uint64(j1)):
-                            bx[ncand] = x[j, 0] + sx
-                            by[ncand] = x[j, 1] + sy
-                            bz[ncand] = x[j, 2] + sz
-                            bj[ncand] = j
-                            ncand += ONE
-            for i in range(start[c], start[c + 1]):
-                xi = x[i, 0]
-                yi = x[i, 1]
-                zi = x[i, 2]
-                if wrap:
-                    for k in range(ncand):
-                        dx = xi - bx[k]
-                        dy = yi - by[k]
-                        dz = zi - bz[k]
-                        dx -= Lr[0] * np.rint(dx * invL[0])
-                        dy -= Lr[1] * np.rint(dy * invL[1])
-                        dz -= Lr[2] * np.rint(dz * invL[2])
-                        r2[k] = dx * dx + dy * dy + dz * dz
-                else:
-                    for k in range(ncand):
-                        dx = xi - bx[k]
-                        dy = yi - by[k]
-                        dz = zi - bz[k]
-                        r2[k] = dx * dx + dy * dy + dz * dz
-                r2[self0 + i - start[c]] = np.inf
-                count = ZERO
+                row = nx * (ky + ny * kz)
+                for seg in range(2):
+                    if seg == 0:
+                        j0 = start[row + xlo0]
+                        j1 = start[row + xhi0 + 1]
+                        sx = sx0
+                    else:
+                        if xhi1 < xlo1:
+                            break
+                        j0 = start[row + xlo1]
+                        j1 = start[row + xhi1 + 1]
+                        sx = sx1
+                    if a == 0 and b == 0 and j0 <= start[c] < j1:
+                        self0 = int(ncand) + start[c] - j0
+                    for j in range(np.uint64(j0), np.uint64(j1)):
+                        bx[ncand] = x[j, 0] + sx
+                        by[ncand] = x[j, 1] + sy
+                        bz[ncand] = x[j, 2] + sz
+                        bj[ncand] = j
+                        ncand += ONE
+        for i in range(start[c], start[c + 1]):
+            xi = x[i, 0]
+            yi = x[i, 1]
+            zi = x[i, 2]
+            if wrap:
                 for k in range(ncand):
-                    rowbuf[count] = k
-                    count += np.uint64(r2[k] < rlist2)
-                m = min(int(count), maxnb)
-                for k in range(m):
-                    nbr[i, k] = bj[np.uint64(rowbuf[k])]
-                nnb[i] = m
-                need = max(need, int(count))
+                    dx = xi - bx[k]
+                    dy = yi - by[k]
+                    dz = zi - bz[k]
+                    dx -= Lr[0] * np.rint(dx * invL[0])
+                    dy -= Lr[1] * np.rint(dy * invL[1])
+                    dz -= Lr[2] * np.rint(dz * invL[2])
+                    r2[k] = dx * dx + dy * dy + dz * dz
+            else:
+                for k in range(ncand):
+                    dx = xi - bx[k]
+                    dy = yi - by[k]
+                    dz = zi - bz[k]
+                    r2[k] = dx * dx + dy * dy + dz * dz
+            r2[self0 + i - start[c]] = np.inf
+            count = ZERO
+            for k in range(ncand):
+                rowbuf[count] = k
+                count += np.uint64(r2[k] < rlist2)
+            m = min(int(count), maxnb)
+            for k in range(m):
+                nbr[i, k] = bj[np.uint64(rowbuf[k])]
+            nnb[i] = m
+            need = max(need, int(count))
     return need
 
 
@@ -471,12 +506,7 @@ def build_half_list(
     owns the cell and their order depends only on the positions. Returns the largest row
     length needed (> ``half.shape[1]``: rows were cut, grow and build again).
     """
-    maxnb = half.shape[1]
-    nx = nc[0]
-    ny = nc[1]
-    nz = nc[2]
-    ncell = nx * ny * nz
-    px = periodic[0]
+    ncell = nc[0] * nc[1] * nc[2]
     frozen = np.zeros(x.shape[0], dtype=np.bool_)
     if rowless > 0:
         for i in range(x.shape[0]):
@@ -486,96 +516,122 @@ def build_half_list(
         fullest = max(fullest, start[c + 1] - start[c])
     # 12 runs of 5 cells (dz > 0, or dz = 0 and dy > 0) and the own run of 3 cells.
     cap = (12 * (2 * REACH + 1) + REACH + 1) * fullest
-    block = 32
-    nblock = (ncell + block - 1) // block
-    need = 0
+    nblock = (ncell + BLOCK - 1) // BLOCK
+    needs = np.zeros(nblock, dtype=np.int64)
     for blk in prange(nblock):
-        bx = np.empty(cap)
-        by = np.empty(cap)
-        bz = np.empty(cap)
-        bj = np.empty(cap, dtype=np.int32)
-        bf = np.empty(cap, dtype=np.bool_)
-        r2 = np.empty(cap)
-        rowbuf = np.empty(cap, dtype=np.int32)
-        for c in range(blk * block, min(ncell, (blk + 1) * block)):
-            if start[c + 1] == start[c]:
-                continue
-            cx = c % nx
-            cy = (c // nx) % ny
-            cz = c // (nx * ny)
-            # Gather the candidates run by run (written out here: as a function called per
-            # run, with its arrays' reference counting, the gather took twice as long).
-            ncand = ZERO
-            for run in range(13):
-                if run == 0:  # own row first: cells cx … cx + 2, from cell c's own atoms
-                    a, b, lo, hi = 0, 0, cx, cx + REACH
-                elif run <= REACH:  # dz = 0, dy = 1, 2
-                    a, b, lo, hi = 0, run, cx - REACH, cx + REACH
-                else:  # dz = 1, 2, dy = −2 … 2
-                    q = run - REACH - 1
-                    a = 1 + q // (2 * REACH + 1)
-                    b = q % (2 * REACH + 1) - REACH
-                    lo, hi = cx - REACH, cx + REACH
-                kz = cz + a
-                sz = 0.0
-                if kz >= nz:
-                    if not periodic[2]:
-                        continue
-                    kz -= nz
-                    sz = L[2]
-                ky = cy + b
-                sy = 0.0
-                if ky < 0 or ky >= ny:
-                    if not periodic[1]:
-                        continue
-                    sy = -L[1] if ky < 0 else L[1]
-                    ky += ny if ky < 0 else -ny
-                row = nx * (ky + ny * kz)
-                # The run's cells along x: one range of atoms, or two split at the periodic
-                # seam (the far one shifted by ±L_x); clipped at walls.
-                j0b, j1b, sxa, sxb = 0, 0, 0.0, 0.0
-                if px and lo < 0:
-                    j0a, j1a, sxa = start[row + lo + nx], start[row + nx], -L[0]
-                    j0b, j1b = start[row], start[row + hi + 1]
-                elif px and hi >= nx:
-                    j0a, j1a = start[row + lo], start[row + nx]
-                    j0b, j1b, sxb = start[row], start[row + hi - nx + 1], L[0]
-                else:
-                    j0a, j1a = start[row + max(lo, 0)], start[row + min(hi, nx - 1) + 1]
-                for seg in range(2):
-                    j0 = j0a if seg == 0 else j0b
-                    j1 = j1a if seg == 0 else j1b
-                    sx = sxa if seg == 0 else sxb
-                    for j in range(np.uint64(j0), np.uint64(j1)):
-                        bx[ncand] = x[j, 0] + sx
-                        by[ncand] = x[j, 1] + sy
-                        bz[ncand] = x[j, 2] + sz
-                        bj[ncand] = j
-                        bf[ncand] = frozen[j]
-                        ncand += ONE
-            for i in range(start[c], start[c + 1]):
-                xi = x[i, 0]
-                yi = x[i, 1]
-                zi = x[i, 2]
-                k0 = i - start[c] + 1  # the candidates after i
-                # All candidates, k < k0 too: a loop from 0 is vectorised better (measured).
-                for k in range(ncand):
-                    dx = xi - bx[k]
-                    dy = yi - by[k]
-                    dz = zi - bz[k]
-                    r2[k] = dx * dx + dy * dy + dz * dz
-                count = ZERO
-                if frozen[i]:
-                    for k in range(np.uint64(k0), ncand):
-                        rowbuf[count] = k
-                        count += np.uint64((r2[k] < rlist2) & (not bf[k]))
-                else:
-                    for k in range(np.uint64(k0), ncand):
-                        rowbuf[count] = k
-                        count += np.uint64(r2[k] < rlist2)
-                m = min(int(count), maxnb)
-                for k in range(m):
-                    half[i, k] = bj[np.uint64(rowbuf[k])]
-                nhalf[i] = m
-                need = max(need, int(count))
+        needs[blk] = _half_block(blk, cap, x, frozen, L, periodic, nc, start, rlist2, half, nhalf)
+    return needs.max() if nblock > 0 else 0
+
+
+@njit
+def _half_block(
+    blk: int,
+    cap: int,
+    x: np.ndarray,
+    frozen: np.ndarray,
+    L: np.ndarray,
+    periodic: np.ndarray,
+    nc: np.ndarray,
+    start: np.ndarray,
+    rlist2: float,
+    half: np.ndarray,
+    nhalf: np.ndarray,
+) -> int:
+    """``build_half_list``'s rows of the cells of block ``blk`` (``BLOCK`` cells), with
+    candidate buffers of ``cap`` entries; returns the block's largest row need."""
+    maxnb = half.shape[1]
+    nx = nc[0]
+    ny = nc[1]
+    nz = nc[2]
+    ncell = nx * ny * nz
+    px = periodic[0]
+    need = 0
+    bx = np.empty(cap)
+    by = np.empty(cap)
+    bz = np.empty(cap)
+    bj = np.empty(cap, dtype=np.int32)
+    bf = np.empty(cap, dtype=np.bool_)
+    r2 = np.empty(cap)
+    rowbuf = np.empty(cap, dtype=np.int32)
+    for c in range(blk * BLOCK, min(ncell, (blk + 1) * BLOCK)):
+        if start[c + 1] == start[c]:
+            continue
+        cx = c % nx
+        cy = (c // nx) % ny
+        cz = c // (nx * ny)
+        # Gather the candidates run by run (written out here: as a function called per
+        # run, with its arrays' reference counting, the gather took twice as long).
+        ncand = ZERO
+        for run in range(13):
+            if run == 0:  # own row first: cells cx … cx + 2, from cell c's own atoms
+                a, b, lo, hi = 0, 0, cx, cx + REACH
+            elif run <= REACH:  # dz = 0, dy = 1, 2
+                a, b, lo, hi = 0, run, cx - REACH, cx + REACH
+            else:  # dz = 1, 2, dy = −2 … 2
+                q = run - REACH - 1
+                a = 1 + q // (2 * REACH + 1)
+                b = q % (2 * REACH + 1) - REACH
+                lo, hi = cx - REACH, cx + REACH
+            kz = cz + a
+            sz = 0.0
+            if kz >= nz:
+                if not periodic[2]:
+                    continue
+                kz -= nz
+                sz = L[2]
+            ky = cy + b
+            sy = 0.0
+            if ky < 0 or ky >= ny:
+                if not periodic[1]:
+                    continue
+                sy = -L[1] if ky < 0 else L[1]
+                ky += ny if ky < 0 else -ny
+            row = nx * (ky + ny * kz)
+            # The run's cells along x: one range of atoms, or two split at the periodic
+            # seam (the far one shifted by ±L_x); clipped at walls.
+            j0b, j1b, sxa, sxb = 0, 0, 0.0, 0.0
+            if px and lo < 0:
+                j0a, j1a, sxa = start[row + lo + nx], start[row + nx], -L[0]
+                j0b, j1b = start[row], start[row + hi + 1]
+            elif px and hi >= nx:
+                j0a, j1a = start[row + lo], start[row + nx]
+                j0b, j1b, sxb = start[row], start[row + hi - nx + 1], L[0]
+            else:
+                j0a, j1a = start[row + max(lo, 0)], start[row + min(hi, nx - 1) + 1]
+            for seg in range(2):
+                j0 = j0a if seg == 0 else j0b
+                j1 = j1a if seg == 0 else j1b
+                sx = sxa if seg == 0 else sxb
+                for j in range(np.uint64(j0), np.uint64(j1)):
+                    bx[ncand] = x[j, 0] + sx
+                    by[ncand] = x[j, 1] + sy
+                    bz[ncand] = x[j, 2] + sz
+                    bj[ncand] = j
+                    bf[ncand] = frozen[j]
+                    ncand += ONE
+        for i in range(start[c], start[c + 1]):
+            xi = x[i, 0]
+            yi = x[i, 1]
+            zi = x[i, 2]
+            k0 = i - start[c] + 1  # the candidates after i
+            # All candidates, k < k0 too: a loop from 0 is vectorised better (measured).
+            for k in range(ncand):
+                dx = xi - bx[k]
+                dy = yi - by[k]
+                dz = zi - bz[k]
+                r2[k] = dx * dx + dy * dy + dz * dz
+            count = ZERO
+            if frozen[i]:
+                for k in range(np.uint64(k0), ncand):
+                    rowbuf[count] = k
+                    count += np.uint64((r2[k] < rlist2) & (not bf[k]))
+            else:
+                for k in range(np.uint64(k0), ncand):
+                    rowbuf[count] = k
+                    count += np.uint64(r2[k] < rlist2)
+            m = min(int(count), maxnb)
+            for k in range(m):
+                half[i, k] = bj[np.uint64(rowbuf[k])]
+            nhalf[i] = m
+            need = max(need, int(count))
     return need
