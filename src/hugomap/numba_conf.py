@@ -22,6 +22,16 @@ import numba
 # loaded, at the first parallel loop; a user's own setting wins.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
+# LLVM at -O2 rather than numba's default -O3: the kernels run as fast (the LJ forces and
+# list build, the CSPH step: benchmarks/README.md) and compile in about 15 % less time,
+# which every fresh install waits for before its first run. Set before the first compile
+# (the optimisation level is read then); a user's own NUMBA_OPT wins.
+if "NUMBA_OPT" not in os.environ:
+    try:
+        numba.config.OPT = numba.core.config._OptLevel(2)
+    except AttributeError:  # pragma: no cover - a numba without that class: its own level
+        pass
+
 FASTMATH: set[str] = {"nsz", "arcp", "contract", "afn", "reassoc"}
 JIT_FLAGS: dict = {"cache": True, "fastmath": FASTMATH, "error_model": "numpy", "nogil": True}
 PARALLEL_FLAGS: dict = {**JIT_FLAGS, "parallel": True}

@@ -203,11 +203,15 @@ def rebuild(
     arguments: called with a constant True from jitted code and with a bool from Python,
     numba compiled and cached two overloads, and a process that loaded the second from the
     cache called a null pointer.)"""
-    start[:] = sort_by_cell(x, v, f, ids, L, nc)
+    fresh = sort_by_cell(x, v, f, ids, L, nc)
+    for c in range(start.shape[0]):  # loops, not slice assignment: faster to compile
+        start[c] = fresh[c]
     need = build_lists(
         x, ids, L, periodic, nc, start, rlist2, nbr, nnb, use_half, half, nhalf, rowless
     )
-    x_ref[:] = x
+    for i in range(x.shape[0]):
+        for d in range(3):
+            x_ref[i, d] = x[i, d]
     return need
 
 

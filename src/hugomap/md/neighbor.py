@@ -250,30 +250,55 @@ def build_full_list(
     Returns the largest row length needed; if it exceeds ``nbr.shape[1]`` the rows were cut
     and the caller must grow ``nbr`` and build again.
     """
-    nx = nc[0]
-    ny = nc[1]
-    nz = nc[2]
-    ncell = nx * ny * nz
+    # Everything but the prange loop is in serial helpers: numba turns array allocations
+    # and reductions in a parallel function into parallel loops of their own, each about a
+    # second to compile on every fresh install.
+    Lr, invL, oy, oz, cap, nblock = _full_plan(L, periodic, nc, start)
+    needs = np.empty(nblock, dtype=np.int64)
+    for blk in prange(nblock):
+        needs[blk] = _full_block(blk, cap, x, L, periodic, nc, start, rlist2, nbr, nnb, Lr, invL,
+                                 oy, oz)  # fmt: skip
+    return _largest(needs)
+
+
+@njit
+def _largest(needs: np.ndarray) -> int:
+    """The largest of the blocks' row needs (0 for no block)."""
+    need = 0
+    for b in range(needs.shape[0]):
+        need = max(need, needs[b])
+    return need
+
+
+@njit
+def _fullest(start: np.ndarray) -> int:
+    """The most atoms in one cell (at least 1), from the cell offsets ``start``."""
+    fullest = 1
+    for c in range(start.shape[0] - 1):
+        fullest = max(fullest, start[c + 1] - start[c])
+    return fullest
+
+
+@njit
+def _full_plan(
+    L: np.ndarray, periodic: np.ndarray, nc: np.ndarray, start: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, int]:
+    """``build_full_list``'s set-up: ``Lr`` (L_d along a periodic dimension too short for
+    the stencil, else 0), 1/L, the y and z cell offsets, the candidate buffers' size and the
+    number of blocks of cells."""
     Lr = np.zeros(3)
     invL = np.empty(3)
     for d in range(3):
         invL[d] = 1.0 / L[d]
         if periodic[d] and nc[d] < 2 * REACH + 1:
             Lr[d] = L[d]
-    oy = _offsets(ny, periodic[1], REACH)
-    oz = _offsets(nz, periodic[2], REACH)
-    ox = _offsets(nx, periodic[0], REACH)
+    oy = _offsets(nc[1], periodic[1], REACH)
+    oz = _offsets(nc[2], periodic[2], REACH)
+    ox = _offsets(nc[0], periodic[0], REACH)
     # Room for the candidates of any cell: stencil cells times the fullest cell.
-    fullest = 1
-    for c in range(ncell):
-        fullest = max(fullest, start[c + 1] - start[c])
-    cap = ox.size * oy.size * oz.size * fullest
-    nblock = (ncell + BLOCK - 1) // BLOCK
-    needs = np.zeros(nblock, dtype=np.int64)
-    for blk in prange(nblock):
-        needs[blk] = _full_block(blk, cap, x, L, periodic, nc, start, rlist2, nbr, nnb, Lr, invL,
-                                 oy, oz)  # fmt: skip
-    return needs.max() if nblock > 0 else 0
+    cap = ox.size * oy.size * oz.size * _fullest(start)
+    ncell = nc[0] * nc[1] * nc[2]
+    return Lr, invL, oy, oz, cap, (ncell + BLOCK - 1) // BLOCK
 
 
 @njit
@@ -506,21 +531,23 @@ def build_half_list(
     owns the cell and their order depends only on the positions. Returns the largest row
     length needed (> ``half.shape[1]``: rows were cut, grow and build again).
     """
-    ncell = nc[0] * nc[1] * nc[2]
-    frozen = np.zeros(x.shape[0], dtype=np.bool_)
-    if rowless > 0:
-        for i in range(x.shape[0]):
-            frozen[i] = -rowless <= ids[i] < 0
-    fullest = 1
-    for c in range(ncell):
-        fullest = max(fullest, start[c + 1] - start[c])
+    frozen = _rowless_mask(ids, rowless)  # serial helpers: see build_full_list
     # 12 runs of 5 cells (dz > 0, or dz = 0 and dy > 0) and the own run of 3 cells.
-    cap = (12 * (2 * REACH + 1) + REACH + 1) * fullest
-    nblock = (ncell + BLOCK - 1) // BLOCK
-    needs = np.zeros(nblock, dtype=np.int64)
+    cap = (12 * (2 * REACH + 1) + REACH + 1) * _fullest(start)
+    nblock = (nc[0] * nc[1] * nc[2] + BLOCK - 1) // BLOCK
+    needs = np.empty(nblock, dtype=np.int64)
     for blk in prange(nblock):
         needs[blk] = _half_block(blk, cap, x, frozen, L, periodic, nc, start, rlist2, half, nhalf)
-    return needs.max() if nblock > 0 else 0
+    return _largest(needs)
+
+
+@njit
+def _rowless_mask(ids: np.ndarray, rowless: int) -> np.ndarray:
+    """True for the frozen atoms with ids −1 … −``rowless`` (the window's inflow copy)."""
+    frozen = np.empty(ids.shape[0], dtype=np.bool_)
+    for i in range(ids.shape[0]):
+        frozen[i] = -rowless <= ids[i] < 0
+    return frozen
 
 
 @njit
