@@ -101,7 +101,7 @@ def _accuracy(ds: xr.Dataset) -> str:
     want = [f"{q} {100 * num('target_' + q):g} %" for q in rel if math.isfinite(num("target_" + q))]
     grown = num("sample_factor")  # a piston run again on a longer sample (stages.piston)
     if grown > 1.0:
-        want.append(f"run again on a sample {grown:.2g} × as long")
+        want.append(f"second run, on a sample {grown:.2g} × as long")
     return ", ".join(got) + (f" (target {', '.join(want)})" if got and want else "")
 
 
