@@ -203,9 +203,8 @@ ONE = np.uint64(1)
 # past it, a rebuild.
 SEARCH_BUDGET = 8.0
 # The builds share cells out among the threads in blocks of this many (x fastest), each
-# block's rows built by one call (``_full_block``, ``_half_block``): a call per block costs
-# nothing beside its cells' work, and numba compiles a ``prange`` loop that only calls much
-# faster than one holding the whole build.
+# block's rows built by one call (``_full_block``, ``_half_block``; a call per block costs
+# nothing beside its cells' work), so that the parallel functions stay small.
 BLOCK = 32
 
 
