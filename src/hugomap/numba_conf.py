@@ -23,7 +23,7 @@ import numba
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 # LLVM at -O2 rather than numba's default -O3: the kernels run as fast (the LJ forces and
-# list build, the CSPH step: benchmarks/README.md) and compile in about 15 % less time,
+# list build, the CSPH step: benchmarks/README.md) and compile in about a tenth less time,
 # which every fresh install waits for before its first run. Set before the first compile
 # (the optimisation level is read then); a user's own NUMBA_OPT wins.
 if "NUMBA_OPT" not in os.environ:

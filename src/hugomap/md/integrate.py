@@ -127,16 +127,24 @@ def sort_by_cell(
     # Plain loops, not x[:] = x[order]: the fancy index's shape checks took numba seconds
     # to compile, at the first run of every fresh install.
     tmp = np.empty(x.shape[0])
-    for a in (x, v, f):
-        for d in range(3):
-            for i in range(x.shape[0]):
-                tmp[i] = a[order[i], d]
-            for i in range(x.shape[0]):
-                a[i, d] = tmp[i]
+    _permute_rows(x, order, tmp)
+    _permute_rows(v, order, tmp)
+    _permute_rows(f, order, tmp)
     ids_old = ids.copy()
     for i in range(ids.shape[0]):
         ids[i] = ids_old[order[i]]
     return start
+
+
+@njit
+def _permute_rows(a: np.ndarray, order: np.ndarray, tmp: np.ndarray) -> None:
+    """a[i] ← a[order[i]] in place for an (n, 3) array, one column at a time through
+    ``tmp`` (n,)."""
+    for d in range(3):
+        for i in range(a.shape[0]):
+            tmp[i] = a[order[i], d]
+        for i in range(a.shape[0]):
+            a[i, d] = tmp[i]
 
 
 @njit
