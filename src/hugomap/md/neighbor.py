@@ -54,6 +54,26 @@ def cell_of(x: np.ndarray, L: np.ndarray, nc: np.ndarray) -> np.ndarray:
 
 
 @njit
+def nearest_image(dd: float, Ld: float) -> float:
+    """The separation ``dd`` [σ] of two coordinates in [0, Ld] along a periodic dimension,
+    taken to its nearest image: one shift at most, so a branch rather than dd − Ld
+    rint(dd/Ld), whose division was most of the cost of a step's displacement pass."""
+    if dd > 0.5 * Ld:
+        return dd - Ld
+    if dd < -0.5 * Ld:
+        return dd + Ld
+    return dd
+
+
+@njit
+def _cell_along(k: int, n: int, periodic: bool) -> int:
+    """Cell k of a dimension of n cells, wrapped where it is periodic; −1 past a wall."""
+    if periodic:
+        return k % n
+    return k if 0 <= k < n else -1
+
+
+@njit
 def displacement2(
     x: np.ndarray, x_ref: np.ndarray, i: int, L: np.ndarray, periodic: np.ndarray, shift_x: float
 ) -> float:
@@ -63,13 +83,7 @@ def displacement2(
     d2 = 0.0
     for d in range(3):
         if periodic[d]:
-            # both ends lie in [0, L], so one image shift at most; a branch, not rint(dd / L):
-            # the division was most of the cost of a step's displacement pass
-            dd = x[i, d] - x_ref[i, d]
-            if dd > 0.5 * L[d]:
-                dd -= L[d]
-            elif dd < -0.5 * L[d]:
-                dd += L[d]
+            dd = nearest_image(x[i, d] - x_ref[i, d], L[d])
         else:
             dd = x[i, d] - x_ref[i, d] - (shift_x if d == 0 else 0.0)
         d2 += dd * dd
@@ -140,22 +154,16 @@ def list_holds(
         iy = cell_coord(x_ref[i, 1], L[1], ny)
         iz = cell_coord(x_ref[i, 2], L[2], nz)
         for a in oz:
-            cz = iz + a
-            if periodic[2]:
-                cz %= nz
-            elif cz < 0 or cz >= nz:
+            cz = _cell_along(iz + a, nz, periodic[2])
+            if cz < 0:
                 continue
             for b in oy:
-                cy = iy + b
-                if periodic[1]:
-                    cy %= ny
-                elif cy < 0 or cy >= ny:
+                cy = _cell_along(iy + b, ny, periodic[1])
+                if cy < 0:
                     continue
                 for e in ox:
-                    cx = ix + e
-                    if periodic[0]:
-                        cx %= nx
-                    elif cx < 0 or cx >= nx:
+                    cx = _cell_along(ix + e, nx, periodic[0])
+                    if cx < 0:
                         continue
                     c = cx + nx * (cy + ny * cz)
                     for j in range(start[c], start[c + 1]):
@@ -165,7 +173,7 @@ def list_holds(
                         for d in range(3):
                             dd = x_ref[j, d] - x_ref[i, d]
                             if periodic[d]:
-                                dd -= L[d] * np.rint(dd / L[d])
+                                dd = nearest_image(dd, L[d])
                             r2 += dd * dd
                         if r2 < in_list2:
                             continue
