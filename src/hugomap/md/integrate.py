@@ -36,6 +36,7 @@ from .neighbor import (
     half_from_full_rowless,
     half_stencil_ok,
     list_holds,
+    rowless_atom,
 )
 
 OK, GROW, NAN, CFL, LOST = 0, 1, 2, 3, 4
@@ -232,7 +233,7 @@ def drop_rows(ids: np.ndarray, nnb: np.ndarray, rowless: int) -> None:
     if rowless <= 0:
         return
     for i in range(ids.shape[0]):
-        if -rowless <= ids[i] < 0:
+        if rowless_atom(ids[i], rowless):
             nnb[i] = 0
 
 
@@ -262,7 +263,7 @@ def compute_forces(
             forces_half_threads(x, L, periodic, half, nhalf, rc2, f, fbuf)
         if rowless > 0:
             for i in range(ids.shape[0]):
-                if -rowless <= ids[i] < 0:
+                if rowless_atom(ids[i], rowless):
                     f[i, 0] = 0.0
                     f[i, 1] = 0.0
                     f[i, 2] = 0.0

@@ -54,6 +54,13 @@ def cell_of(x: np.ndarray, L: np.ndarray, nc: np.ndarray) -> np.ndarray:
 
 
 @njit
+def rowless_atom(idv: int, rowless: int) -> bool:
+    """Whether an atom of id ``idv`` is one of the frozen ids −1 … −``rowless`` (the window's
+    inflow copy), which keep no force row (``integrate.drop_rows``)."""
+    return -rowless <= idv < 0
+
+
+@njit
 def nearest_image(dd: float, Ld: float) -> float:
     """The separation ``dd`` [σ] of two coordinates in [0, Ld] along a periodic dimension,
     taken to its nearest image: one shift at most, so a branch rather than dd − Ld
@@ -487,12 +494,12 @@ def half_from_full_rowless(
     for i in range(n):
         if nnb[i] > w:
             raise ValueError("half list narrower than a full neighbour row")
-        fi = -rowless <= ids[i] < 0
+        fi = rowless_atom(ids[i], rowless)
         k = 0
         for m in range(nnb[i]):
             j = nbr[i, m]
             half[i, k] = j
-            k += (j > i) & (not (fi and -rowless <= ids[j] < 0))
+            k += (j > i) & (not (fi and rowless_atom(ids[j], rowless)))
         nhalf[i] = k
 
 
@@ -553,7 +560,7 @@ def _rowless_mask(ids: np.ndarray, rowless: int) -> np.ndarray:
     """True for the frozen atoms with ids −1 … −``rowless`` (the window's inflow copy)."""
     frozen = np.empty(ids.shape[0], dtype=np.bool_)
     for i in range(ids.shape[0]):
-        frozen[i] = -rowless <= ids[i] < 0
+        frozen[i] = rowless_atom(ids[i], rowless)
     return frozen
 
 
