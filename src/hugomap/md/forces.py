@@ -226,45 +226,88 @@ def energy_virial_half(
     vir: np.ndarray,
 ) -> None:
     """As ``energy_virial_full`` from the half list: each pair gives ½ U(r_ij) to pe_i and
-    pe_j and ½ r_ij^a F_ij^b to W_i and W_j (the product is even in r_ij), serially."""
+    pe_j and ½ r_ij^a F_ij^b to W_i and W_j (the product is even in r_ij), serially.
+
+    Per row, as ``_half_rows``: gather x_j into scratch, compute the pair terms there (a
+    loop LLVM vectorises, padded with phantom partners beyond rc), then add them to atom i
+    (in registers) and to each j, pair by pair in list order: the same sums, in the same
+    order, as one loop that computes and adds.
+    """
     n = x.shape[0]
     Lp0 = L[0] if periodic[0] else 0.0
     Lp1 = L[1] if periodic[1] else 0.0
     Lp2 = L[2] if periodic[2] else 0.0
+    iL0 = 1.0 / L[0]
+    iL1 = 1.0 / L[1]
+    iL2 = 1.0 / L[2]
+    w = half.shape[1] + PAD
+    b = np.empty((7, w))  # x_j, y_j, z_j gathered; then ½U and the six ½ r^a F^b
+    ox = 0.5 * L[0] if periodic[0] else 1.0e3  # the phantom, as in ``_half_rows``
+    oy = 0.5 * L[1] if periodic[1] else 1.0e3
+    oz = 0.5 * L[2] if periodic[2] else 1.0e3
     pe[:] = 0.0
     vir[:, :] = 0.0
     for i in range(n):
-        for m in range(nhalf[i]):
-            j = half[i, m]
-            dx = x[i, 0] - x[j, 0]
-            dy = x[i, 1] - x[j, 1]
-            dz = x[i, 2] - x[j, 2]
-            dx -= Lp0 * np.rint(dx / L[0])
-            dy -= Lp1 * np.rint(dy / L[1])
-            dz -= Lp2 * np.rint(dz / L[2])
+        xi = x[i, 0]
+        yi = x[i, 1]
+        zi = x[i, 2]
+        k = nhalf[i]
+        for m in range(k):
+            j = np.uint64(half[i, m])
+            b[0, m] = x[j, 0]
+            b[1, m] = x[j, 1]
+            b[2, m] = x[j, 2]
+        kp = (k + PAD - 1) // PAD * PAD
+        for m in range(k, kp):
+            b[0, m] = xi + ox
+            b[1, m] = yi + oy
+            b[2, m] = zi + oz
+        for m in range(kp):
+            dx = xi - b[0, m]
+            dy = yi - b[1, m]
+            dz = zi - b[2, m]
+            dx -= Lp0 * np.rint(dx * iL0)
+            dy -= Lp1 * np.rint(dy * iL1)
+            dz -= Lp2 * np.rint(dz * iL2)
             u, fr = lj_pair(dx * dx + dy * dy + dz * dz, rc2, ushift)
-            u *= 0.5
             fr *= 0.5
-            w0 = fr * dx * dx
-            w1 = fr * dy * dy
-            w2 = fr * dz * dz
-            w3 = fr * dx * dy
-            w4 = fr * dx * dz
-            w5 = fr * dy * dz
-            pe[i] += u
-            pe[j] += u
-            vir[i, 0] += w0
-            vir[i, 1] += w1
-            vir[i, 2] += w2
-            vir[i, 3] += w3
-            vir[i, 4] += w4
-            vir[i, 5] += w5
-            vir[j, 0] += w0
-            vir[j, 1] += w1
-            vir[j, 2] += w2
-            vir[j, 3] += w3
-            vir[j, 4] += w4
-            vir[j, 5] += w5
+            b[0, m] = 0.5 * u
+            b[1, m] = fr * dx * dx
+            b[2, m] = fr * dy * dy
+            b[3, m] = fr * dz * dz
+            b[4, m] = fr * dx * dy
+            b[5, m] = fr * dx * dz
+            b[6, m] = fr * dy * dz
+        e = pe[i]
+        v0 = vir[i, 0]
+        v1 = vir[i, 1]
+        v2 = vir[i, 2]
+        v3 = vir[i, 3]
+        v4 = vir[i, 4]
+        v5 = vir[i, 5]
+        for m in range(k):
+            j = np.uint64(half[i, m])
+            e += b[0, m]
+            v0 += b[1, m]
+            v1 += b[2, m]
+            v2 += b[3, m]
+            v3 += b[4, m]
+            v4 += b[5, m]
+            v5 += b[6, m]
+            pe[j] += b[0, m]
+            vir[j, 0] += b[1, m]
+            vir[j, 1] += b[2, m]
+            vir[j, 2] += b[3, m]
+            vir[j, 3] += b[4, m]
+            vir[j, 4] += b[5, m]
+            vir[j, 5] += b[6, m]
+        pe[i] = e
+        vir[i, 0] = v0
+        vir[i, 1] = v1
+        vir[i, 2] = v2
+        vir[i, 3] = v3
+        vir[i, 4] = v4
+        vir[i, 5] = v5
 
 
 @pjit
