@@ -127,13 +127,6 @@ class Backend(Protocol):
         missed its error target (``stages.piston``); None where the sample cannot grow (a
         sample read from a file)."""
 
-    def wider_sample(self, scene: dict, factor: float) -> dict | None:
-        """The scene with a cross-section at least ``factor`` (> 1) times as large and the
-        same length (``widened``), for a piston that missed its error target: its drive
-        stays as long, its stated errors fall as (area × drive)^(−1/2) (``stages.piston``).
-        None where the sample has no cross-section of its own to widen (a continuum
-        sample, one read from a file): the stage lengthens it instead."""
-
     def figure_labels(self, scene: dict) -> dict:
         """Figure text: ``axes`` (label and scale factor of V, P, u_p_measured, D), ``tag``
         (of the points), ``reference`` (the reference curve's name), ``title``."""
@@ -168,28 +161,6 @@ def lengthened(scene: dict, key: tuple, factor: float) -> dict:
     old = box[last]
     box[last] = int(math.ceil(old * factor)) if isinstance(old, int) else float(old) * factor
     out["shock"]["max_time"] = float(out["shock"]["max_time"]) * factor
-    return out
-
-
-def widened(scene: dict, key: tuple, factor: float) -> dict:
-    """A copy of ``scene`` whose two cell counts across the shock at ``key`` (a path of
-    keys, e.g. ("sample", "cells"): the counts at indices 1 and 2) multiply to at least
-    ``factor`` times their old product: the smallest such product, each count at least its
-    old one, the shape nearest the old one among equal products (then the smaller count
-    first)."""
-    out = copy.deepcopy(scene)
-    box = out
-    for k in key:
-        box = box[k]
-    ny, nz = int(box[1]), int(box[2])
-    want = factor * ny * nz * (1.0 - 1e-12)  # a factor that is a product's ratio keeps it
-    best = None
-    for a in range(ny, int(math.ceil(want / nz)) + 1):
-        b = max(nz, int(math.ceil(want / a)))
-        rank = (a * b, round(abs(math.log(a * nz / (b * ny))), 9), a)
-        if best is None or rank < best[0]:
-            best = (rank, a, b)
-    box[1], box[2] = best[1], best[2]
     return out
 
 

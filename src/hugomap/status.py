@@ -88,7 +88,7 @@ def _open_status(path: Path) -> tuple[str, str, dict[str, Any]]:
 
 def _accuracy(ds: xr.Dataset) -> str:
     """The accuracy a point bought: 'D ± 0.31 %, P ± 0.52 % (target D 1 %, P 2 %)' from its
-    stated errors (D_err/D, P_err/|P − P0|), and a piston's second run on a larger sample
+    stated errors (D_err/D, P_err/|P − P0|), and a piston's second run on a longer sample
     (``sample_factor``); empty for a file without them."""
 
     def num(k: str) -> float:
@@ -99,9 +99,9 @@ def _accuracy(ds: xr.Dataset) -> str:
     rel = ErrorTarget.relative_errors(values, P0 if math.isfinite(P0) else 0.0)
     got = [f"{q} ± {100 * v:.2g} %" for q, v in rel.items() if math.isfinite(v)]
     want = [f"{q} {100 * num('target_' + q):g} %" for q in rel if math.isfinite(num("target_" + q))]
-    grown = num("sample_factor")  # a piston run again on a larger sample (stages.piston)
+    grown = num("sample_factor")  # a piston run again on a longer sample (stages.piston)
     if grown > 1.0:
-        want.append(f"second run, on a sample {grown:.2g} × as large")
+        want.append(f"second run, on a sample {grown:.2g} × as long")
     return ", ".join(got) + (f" (target {', '.join(want)})" if got and want else "")
 
 

@@ -21,18 +21,12 @@ import pytest
 import xarray as xr
 import yaml
 
-from hugomap.backend import lengthened, widened
+from hugomap.backend import lengthened
 from hugomap.config import validate_config
 from hugomap.methods.target import ErrorTarget
 from hugomap.registry import backend
 from hugomap.stages.load import load_to_target
-from hugomap.stages.piston import (
-    SIZE_MARGIN,
-    grow_to_target,
-    grown_sample,
-    job_cost,
-    piston_point,
-)
+from hugomap.stages.piston import SIZE_MARGIN, grow_to_target, job_cost, piston_point
 from hugomap.stages.sample import prepare_sample
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -68,28 +62,6 @@ def test_lengthened_grows_the_sample_and_the_stage_time_limit_only() -> None:
     assert sc["sample"]["cells"] == [60, 6, 6] and sc["shock"]["max_time"] == 100.0
 
 
-def test_widened_grows_the_cross_section_to_the_least_area_at_or_above_the_factor() -> None:
-    sc = {"sample": {"cells": [180, 6, 6]}, "shock": {"max_time": 100.0}}
-    # 1.79 x 36 = 64.4 cells: 6 x 11 = 66 is the least area above (8 x 9 = 72)
-    assert widened(sc, ("sample", "cells"), 1.79)["sample"]["cells"] == [180, 6, 11]
-    assert widened(sc, ("sample", "cells"), 16 / 9)["sample"]["cells"] == [180, 8, 8]
-    # 72 cells as 6 x 12, 8 x 9, 9 x 8 or 12 x 6: the shape nearest the old one
-    assert widened(sc, ("sample", "cells"), 2.0)["sample"]["cells"] == [180, 8, 9]
-    assert widened({"c": [10, 2, 30]}, ("c",), 1.1)["c"] == [10, 2, 33]  # none shrinks
-    assert widened(sc, ("sample", "cells"), 2.0)["shock"] == sc["shock"]  # the drive stays
-    assert sc["sample"]["cells"] == [180, 6, 6]
-
-
-def test_an_md_sample_grows_wider_a_continuum_or_exact_one_longer() -> None:
-    md = backend({"solver": "md"})
-    sc = {"sample": {"cells": [60, 6, 6]}, "shock": {"max_time": 10.0}}
-    wide, power = grown_sample(md, sc, 1.5)
-    assert (wide["sample"]["cells"], power) == ([60, 6, 9], 1)  # 54 cells: the least area
-    synthetic = backend(_scene(D=0.01))
-    long, power = grown_sample(synthetic, _scene(D=0.01), 1.5)
-    assert power == 2 and long["sample"]["length"] == 1.5 * _scene(D=0.01)["sample"]["length"]
-
-
 def test_the_factor_is_the_law_with_its_margin_within_the_cap_and_budget() -> None:
     t = ErrorTarget(D=0.01)
     factor, note = grow_to_target(1.5, 10.0, t, 2.0)
@@ -101,9 +73,6 @@ def test_the_factor_is_the_law_with_its_margin_within_the_cap_and_budget() -> No
     factor, note = grow_to_target(1.5, 10.0, ErrorTarget(D=0.01, cpu_s=30.0), 2.0)
     assert factor == 1.0 and "target.cpu_s = 30 s" in note
     assert grow_to_target(1.5, 10.0, ErrorTarget(D=0.01, cpu_s=50.0), 2.0)[0] > 1.0
-    # a wider sample costs ~factor the first: 10 s x (1 + 1.8) = 28 s < 30 s
-    factor, note = grow_to_target(1.5, 10.0, ErrorTarget(D=0.01, cpu_s=30.0), 2.0, power=1)
-    assert factor == pytest.approx(1.8) and "run again on a sample 1.8 times as wide" in note
 
 
 def test_a_piston_that_misses_runs_again_on_a_longer_sample(tmp_path: Path) -> None:
@@ -164,6 +133,5 @@ def test_the_job_asks_for_the_longer_sample_it_may_run() -> None:
 def test_a_sample_read_from_a_file_does_not_grow() -> None:
     b = backend({"solver": "md"})
     sc = {"sample": {"cells": [10, 4, 4], "data_file": "x.data"}, "shock": {"max_time": 1.0}}
-    assert b.longer_sample(sc, 2.0) is None and b.wider_sample(sc, 2.0) is None
-    assert grown_sample(b, sc, 2.0) == (None, 2)
+    assert b.longer_sample(sc, 2.0) is None
     assert b.longer_sample({**sc, "sample": {"cells": [10, 4, 4]}}, 2.0)["sample"]["cells"][0] == 20

@@ -559,4 +559,4 @@ def test_a_piston_run_again_says_on_what_sample(tmp_path: Path) -> None:
     write_netcdf(ds, tmp_path / "tiny" / "up0.5" / "piston.nc")
     text = format_table(sweep_status(tmp_path, _config(), now=NOW))
     row = next(ln for ln in text.splitlines() if ln.split()[:2] == ["0.5", "piston"])
-    assert "D ± 0.1 %, P ± 0.2 % (target D 0.2 %, second run, on a sample 1.4 × as large)" in row
+    assert "D ± 0.1 %, P ± 0.2 % (target D 0.2 %, second run, on a sample 1.4 × as long)" in row

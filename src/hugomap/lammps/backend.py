@@ -62,7 +62,7 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.linear_hugoniot import jump_state
-from ..backend import lengthened, widened
+from ..backend import lengthened
 from ..io.dataset import UnitTable, lj_units, si_units
 from ..particles.fcc import lattice_constant
 from ..particles.pole import measure_pole, reference_pole
@@ -595,10 +595,6 @@ class LammpsBackend:
     def longer_sample(self, scene: dict, factor: float) -> dict | None:
         """More lattice cells along x (``backend.lengthened``)."""
         return lengthened(scene, ("sample", "cells", 0), factor)
-
-    def wider_sample(self, scene: dict, factor: float) -> dict | None:
-        """More lattice cells along y and z (``backend.widened``)."""
-        return widened(scene, ("sample", "cells"), factor)
 
     # -- cost ------------------------------------------------------------------------------
     def cost(self, scene: dict, stage: str) -> Resources:

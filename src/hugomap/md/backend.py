@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..backend import lengthened, widened
+from ..backend import lengthened
 from ..io.dataset import lj_units
 from ..particles.fcc import lattice_constant
 from ..particles.pole import measure_pole, reference_pole
@@ -379,13 +379,6 @@ class MDBackend:
         if scene["sample"].get("data_file"):
             return None
         return lengthened(scene, ("sample", "cells", 0), factor)
-
-    def wider_sample(self, scene: dict, factor: float) -> dict | None:
-        """More FCC cells along y and z (``backend.widened``); None for a sample read from
-        ``sample.data_file``, whose cross-section is the file's."""
-        if scene["sample"].get("data_file"):
-            return None
-        return widened(scene, ("sample", "cells"), factor)
 
     def cost(self, scene: dict, stage: str) -> Resources:
         """Memory: the state and neighbour list per atom, plus the profile history held and

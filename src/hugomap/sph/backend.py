@@ -482,11 +482,6 @@ class CSPHBackend:
         pores anew over the whole length."""
         return lengthened(scene, ("sample", "length"), factor)
 
-    def wider_sample(self, scene: dict, factor: float) -> None:
-        """None: a continuum's front has no thermal noise to average over a width (a piston
-        that misses runs on a longer sample)."""
-        return None
-
     def cost(self, scene: dict, stage: str) -> Resources:
         n = self._particles(scene)
         mem = int(BASE_MB + n * BYTES_PER_PARTICLE / 2**20)

@@ -185,31 +185,13 @@ def log_progress(
     )  # fmt: skip
 
 
-# A re-run's sample grows by what the first run's error law asks for, with this margin: an
+# A re-run's drive is the one the first run's error law asks for, with this margin: an
 # 8-block error is itself uncertain by ~27 % (methods.target), and a sample that falls short
 # again costs a third run the user did not ask for.
 SIZE_MARGIN = 1.2
 # target.max_sample_factor where the target does not give it: a second run costs at most
-# about 2 times the first on a wider sample, 4 times on a longer one
+# about 4 times the first
 MAX_SAMPLE_FACTOR = 2.0
-
-
-def grown_sample(b, scene: dict, factor: float) -> tuple[dict | None, int]:
-    """The scene a piston that missed its target runs on again, and the power of ``factor``
-    its CPU grows as: a cross-section ``factor`` times as large where the backend can widen
-    its sample (``Backend.wider_sample``; CPU as the atoms, power 1), else a sample
-    ``factor`` times as long (``Backend.longer_sample``; atoms × steps, power 2; None where
-    it cannot grow either).
-
-    Widening is the cheaper way to the same error: the piston's D is the slope of a front
-    whose position is the mean over the cross-section, and its P the mean of a slab, so
-    both errors fall as (A T)^(−1/2) with the area A as with the drive T, and a wider
-    sample keeps the drive (the default sweep's LJ liquid at u_p = 1 and 1.5 on twice the
-    area: D's and P's stated errors 0.46–0.66 times the narrow sample's, law 0.71)."""
-    wider = b.wider_sample(scene, factor)
-    if wider is not None:
-        return wider, 1
-    return b.longer_sample(scene, factor), 2
 
 
 def max_sample_factor(scene: dict) -> float:
@@ -224,9 +206,9 @@ def piston_point(
 ) -> Path:  # fmt: skip
     """The piston's point (``drive_point``); one that misses its error target (status
     ``target_not_reached``) is run once more on a sample the factor ``grow_to_target``
-    chose larger (``grown_sample``: prepared, loaded and driven in the folder
+    chose longer (``Backend.longer_sample``: prepared, loaded and driven in the folder
     ``<out stem>_sized``, the first run kept there as ``pilot.nc``). The second run's point
-    counts the first's CPU and the larger sample's preparation in its cost and records the
+    counts the first's CPU and the longer sample's preparation in its cost and records the
     factor and the first run's relative errors (``sample_factor``, ``pilot_D_rel_err``,
     ``pilot_P_rel_err``). A killed job resumes: a finished first run,
     sample or loading is not run again."""
@@ -243,21 +225,21 @@ def piston_point(
         room.mkdir(exist_ok=True)
         os.replace(out, pilot)
     factor = float(first["sample_factor"])
-    larger, power = grown_sample(b, scene, factor)
-    log.info("re-running on a sample %.3g times as %s (sample %s): %s", factor,
-             "wide" if power == 1 else "long", json.dumps(larger["sample"]),
-             str(first["diagnostic"].values))  # fmt: skip
+    longer = b.longer_sample(scene, factor)
+    log.info(
+        "re-running on a sample %.3g times as long: %s", factor, str(first["diagnostic"].values)
+    )
     sample, loaded2 = room / "sample.nc", room / "loaded.nc"
-    spent = room / "spent.json"  # the first run's cost and the larger sample's preparation
+    spent = room / "spent.json"  # the first run's cost and the longer sample's preparation
     if not sample.exists():
         clock = Clock({k: float(first[k]) for k in ("wall_s", "cpu_s", "atom_steps") if k in first})
-        prepare_sample(larger, sample)
+        prepare_sample(longer, sample)
         spent.write_text(json.dumps(clock.cost()))
     prior = json.loads(spent.read_text()) if spent.exists() else {}
     if not loaded2.exists():
-        load_to_target(sample, larger, u_p, loaded2)
+        load_to_target(sample, longer, u_p, loaded2)
     rel = {q: float(first[f"{q}_rel_err"]) for q in ("D", "P") if f"{q}_rel_err" in first}
-    return drive_point(loaded2, larger, u_p, out, scheme, prior=prior,
+    return drive_point(loaded2, longer, u_p, out, scheme, prior=prior,
                        extra={"sample_factor": factor, **{f"pilot_{q}_rel_err": v
                                                           for q, v in rel.items()}})  # fmt: skip
 
@@ -271,16 +253,16 @@ def _kept_first_run(room: Path, scene: dict, b) -> xr.Dataset | None:
     """The first run kept in ``room`` (a second run's folder, ``pilot.nc``), or None; a
     room holding what was made for another scene (a config changed between a killed job
     and its rerun: a first run of another scene, or a sample or loading other than the
-    larger sample its factor asks for) is emptied, and None."""
+    longer sample its factor asks for) is emptied, and None."""
     pilot = room / "pilot.nc"
     first = open_dataset(pilot) if pilot.exists() else None
     ok = first is not None and _same_scene(first.attrs.get("scene_config", "null"), scene)
     if ok:
-        larger = grown_sample(b, scene, float(first["sample_factor"]))[0]
+        longer = b.longer_sample(scene, float(first["sample_factor"]))
         for f in (room / "sample.nc", room / "loaded.nc"):
             if ok and f.exists():
                 with netCDF4.Dataset(f) as nc:
-                    ok = _same_scene(getattr(nc, "scene_config", "null"), larger)
+                    ok = _same_scene(getattr(nc, "scene_config", "null"), longer)
     if ok:
         return first
     if room.exists():
@@ -291,39 +273,37 @@ def _kept_first_run(room: Path, scene: dict, b) -> xr.Dataset | None:
 
 
 def grow_to_target(
-    need: float, cpu_s: float, target: ErrorTarget, max_factor: float, power: int = 2
+    need: float, cpu_s: float, target: ErrorTarget, max_factor: float
 ) -> tuple[float, str]:  # fmt: skip
-    """How much larger a piston's sample grows after missing its target, and why: ``need``
-    is the drive the error law asks for over the drive it had, the area too on that law
-    (``grown_sample``); the factor is ``need`` x SIZE_MARGIN, refused (1.0) above
-    ``max_factor`` (``target.max_sample_factor``) or where the second run, about
-    factor^``power`` x ``cpu_s`` (the first run's; ``grown_sample``'s power: 1 wider, 2
-    larger), would overrun ``target.cpu_s`` with the first's spent."""
+    """How much longer a piston's sample grows after missing its target, and why: ``need``
+    is the drive the error law asks for over the drive it had (the sample grows as the
+    drive, its CPU as the square: atoms times steps); the factor is ``need`` x SIZE_MARGIN,
+    refused (1.0) above ``max_factor`` (``target.max_sample_factor``) or where the second
+    run, about factor² x ``cpu_s`` (the first run's), would overrun ``target.cpu_s`` with
+    the first's spent."""
     factor = need * SIZE_MARGIN
     if not factor > 1.0:
         return 1.0, ""
     tried = f"; not run again: {factor:.3g} times with a {SIZE_MARGIN - 1:.0%} margin"
     if factor > max_factor:
         return 1.0, f"{tried}, above target.max_sample_factor = {max_factor:g}"
-    if target.cpu_s is not None and cpu_s * (1.0 + factor**power) > target.cpu_s:
-        return 1.0, (f"{tried} would cost about {cpu_s * factor**power:.3g} s more, above "
+    if target.cpu_s is not None and cpu_s * (1.0 + factor**2) > target.cpu_s:
+        return 1.0, (f"{tried} would cost about {cpu_s * factor**2:.3g} s more, above "
                      f"target.cpu_s = {target.cpu_s:g} s")  # fmt: skip
-    how = "wide" if power == 1 else "long"
-    return factor, f"; run again on a sample {factor:.3g} times as {how}"
+    return factor, f"; run again on a sample {factor:.3g} times as long"
 
 
 def job_cost(scene: dict) -> Resources:
     """A piston job's resources (``Backend.cost``): its first run's, and where its target
-    may grow the sample (``target.max_sample_factor`` F > 1) the larger sample's
-    (``grown_sample``) preparation, loading and drive beside it; its memory the larger
-    sample's."""
+    may grow the sample (``target.max_sample_factor`` F > 1) the longer sample's
+    preparation, loading and drive beside it; its memory the longer sample's."""
     b = backend_of(scene)
     first = b.cost(scene, "piston")
     factor = max_sample_factor(scene)
-    larger = grown_sample(b, scene, factor)[0] if factor > 1.0 else None
-    if larger is None:
+    longer = b.longer_sample(scene, factor) if factor > 1.0 else None
+    if longer is None:
         return first
-    grown = [b.cost(larger, stage) for stage in ("prepare", "load", "piston")]
+    grown = [b.cost(longer, stage) for stage in ("prepare", "load", "piston")]
     return Resources(max(first.mem_mb, *(g.mem_mb for g in grown)),
                      first.cpu_s + sum(g.cpu_s for g in grown), first.ranks)  # fmt: skip
 
@@ -407,18 +387,14 @@ def drive_point(
                                    span, P0=pole.P0, what="drive",
                                    unit=f" {b.units.axes['time']}")  # fmt: skip
         if status == "target_not_reached" and span > 0:
-            # the steady track grows with the sample's length; on the law (A T)^(-1/2) the
-            # drive's ratio is the cross-section's too (grown_sample)
+            # the steady track grows with the sample: its length is what to change
             need = r["time_to_target"] / span
-            grown, power = grown_sample(b, scene, need)
-            diagnostic += (f"; the drive it had on a cross-section about {need:.2g} times as "
-                           "large would state it" if power == 1 else
-                           f"; a drive that long needs a sample about {need:.2g} times as long")  # fmt: skip
+            diagnostic += f"; a drive that long needs a sample about {need:.2g} times as long"
             if prior is None:
                 factor, note = grow_to_target(need, values["cpu_s"], target,
-                                              max_sample_factor(scene), power)  # fmt: skip
-                if factor > 1.0 and grown is None:
-                    factor, note = 1.0, "; not run again: the sample's size is its file's"
+                                              max_sample_factor(scene))  # fmt: skip
+                if factor > 1.0 and b.longer_sample(scene, factor) is None:
+                    factor, note = 1.0, "; not run again: the sample's length is its file's"
                 diagnostic += note
                 values["sample_factor"] = factor
         values.update(r)

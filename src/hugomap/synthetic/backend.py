@@ -148,11 +148,6 @@ class SyntheticBackend:
         """A longer ``sample.length`` (``backend.lengthened``)."""
         return lengthened(scene, ("sample", "length"), factor)
 
-    def wider_sample(self, scene: dict, factor: float) -> None:
-        """None: its exact front has no cross-section (a piston that misses runs on a longer
-        sample)."""
-        return None
-
     def cost(self, scene: dict, stage: str) -> Resources:
         return Resources(512, 1.0)
 
