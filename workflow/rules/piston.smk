@@ -28,6 +28,9 @@ rule prepare_sample:
         " --scene-json {params.scene:q} --out {output} > {log} 2>&1"
 
 
+# Priorities (higher first when cores free up): a loading checkpoint unlocks every point at
+# its u_p, and a piston job is the longest of a sweep where it runs a second time, so
+# starting both early keeps a core from idling at the end.
 rule load_to_target:
     input:
         f"{RES}/{{scene}}/sample.nc",
@@ -35,6 +38,7 @@ rule load_to_target:
         f"{RES}/{{scene}}/up{{up}}/loaded.nc",
     log:
         f"{RES}/logs/{{scene}}/up{{up}}/load.log",
+    priority: 2
     conda:
         "../envs/hugomap.yaml"
     threads: stage_threads("load")
@@ -60,6 +64,7 @@ rule piston_point:
         f"{RES}/{{scene}}/up{{up}}/piston.nc",
     log:
         f"{RES}/logs/{{scene}}/up{{up}}/piston.log",
+    priority: 1
     conda:
         "../envs/hugomap.yaml"
     threads: stage_threads("piston")
