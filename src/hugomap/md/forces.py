@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..numba_conf import njit, pjit, prange
+from ..numba_conf import ijit, njit, pjit, prange
 from .potential import lj_pair
 
 VIRIAL_COMPONENTS = ("xx", "yy", "zz", "xy", "xz", "yz")
@@ -75,6 +75,36 @@ def forces_full(
 
 
 @njit
+def _phantom(L: np.ndarray, periodic: np.ndarray) -> tuple[float, float, float]:
+    """Where a padding partner sits from atom i [σ]: half a box away in each periodic
+    dimension (the minimum image leaves it there; L ≥ 2 rlist there, so r ≥ rc) and far
+    away in the others, so that its pair terms are zero by ``lj_pair``'s select."""
+    return (0.5 * L[0] if periodic[0] else 1.0e3, 0.5 * L[1] if periodic[1] else 1.0e3,
+            0.5 * L[2] if periodic[2] else 1.0e3)  # fmt: skip
+
+
+@ijit
+def _gather_row(
+    x: np.ndarray, half: np.ndarray, i: int, k: int, px: float, py: float, pz: float,
+    bx: np.ndarray, by: np.ndarray, bz: np.ndarray,
+) -> int:  # fmt: skip
+    """Copy the positions of the ``k`` partners of half-list row i into ``bx``, ``by``,
+    ``bz``, then pad them to a multiple of ``PAD`` with phantom partners at (``px``,
+    ``py``, ``pz``) (x_i plus ``_phantom``); return the padded length."""
+    for m in range(k):
+        j = np.uint64(half[i, m])  # unsigned: no negative-index wraparound (module doc)
+        bx[m] = x[j, 0]
+        by[m] = x[j, 1]
+        bz[m] = x[j, 2]
+    kp = (k + PAD - 1) // PAD * PAD
+    for m in range(k, kp):
+        bx[m] = px
+        by[m] = py
+        bz[m] = pz
+    return kp
+
+
+@njit
 def _half_rows(
     x: np.ndarray,
     L: np.ndarray,
@@ -108,11 +138,7 @@ def _half_rows(
     bx = np.empty(w + PAD)
     by = np.empty(w + PAD)
     bz = np.empty(w + PAD)
-    # The phantom sits half a box away in each periodic dimension (the minimum image leaves
-    # it there; L ≥ 2 rlist there, so r ≥ rc) and far away in the others.
-    ox = 0.5 * L[0] if periodic[0] else 1.0e3
-    oy = 0.5 * L[1] if periodic[1] else 1.0e3
-    oz = 0.5 * L[2] if periodic[2] else 1.0e3
+    ox, oy, oz = _phantom(L, periodic)
     for i in range(n):
         out[i, 0] = 0.0
         out[i, 1] = 0.0
@@ -122,16 +148,7 @@ def _half_rows(
         yi = x[i, 1]
         zi = x[i, 2]
         k = nhalf[i]
-        for m in range(k):
-            j = np.uint64(half[i, m])
-            bx[m] = x[j, 0]
-            by[m] = x[j, 1]
-            bz[m] = x[j, 2]
-        kp = (k + PAD - 1) // PAD * PAD
-        for m in range(k, kp):
-            bx[m] = xi + ox
-            by[m] = yi + oy
-            bz[m] = zi + oz
+        kp = _gather_row(x, half, i, k, xi + ox, yi + oy, zi + oz, bx, by, bz)
         fx = 0.0
         fy = 0.0
         fz = 0.0
@@ -242,9 +259,7 @@ def energy_virial_half(
     iL2 = 1.0 / L[2]
     w = half.shape[1] + PAD
     b = np.empty((7, w))  # x_j, y_j, z_j gathered; then ½U and the six ½ r^a F^b
-    ox = 0.5 * L[0] if periodic[0] else 1.0e3  # the phantom, as in ``_half_rows``
-    oy = 0.5 * L[1] if periodic[1] else 1.0e3
-    oz = 0.5 * L[2] if periodic[2] else 1.0e3
+    ox, oy, oz = _phantom(L, periodic)
     pe[:] = 0.0
     vir[:, :] = 0.0
     for i in range(n):
@@ -252,16 +267,7 @@ def energy_virial_half(
         yi = x[i, 1]
         zi = x[i, 2]
         k = nhalf[i]
-        for m in range(k):
-            j = np.uint64(half[i, m])
-            b[0, m] = x[j, 0]
-            b[1, m] = x[j, 1]
-            b[2, m] = x[j, 2]
-        kp = (k + PAD - 1) // PAD * PAD
-        for m in range(k, kp):
-            b[0, m] = xi + ox
-            b[1, m] = yi + oy
-            b[2, m] = zi + oz
+        kp = _gather_row(x, half, i, k, xi + ox, yi + oy, zi + oz, b[0], b[1], b[2])
         for m in range(kp):
             dx = xi - b[0, m]
             dy = yi - b[1, m]

@@ -311,8 +311,13 @@ def _full_plan(
     ox = _offsets(nc[0], periodic[0], REACH)
     # Room for the candidates of any cell: stencil cells times the fullest cell.
     cap = ox.size * oy.size * oz.size * _fullest(start)
-    ncell = nc[0] * nc[1] * nc[2]
-    return Lr, invL, oy, oz, cap, (ncell + BLOCK - 1) // BLOCK
+    return Lr, invL, oy, oz, cap, _blocks(nc)
+
+
+@njit
+def _blocks(nc: np.ndarray) -> int:
+    """How many blocks of ``BLOCK`` cells the builds share out among the threads."""
+    return (nc[0] * nc[1] * nc[2] + BLOCK - 1) // BLOCK
 
 
 @njit
@@ -548,7 +553,7 @@ def build_half_list(
     frozen = _rowless_mask(ids, rowless)  # serial helpers: see build_full_list
     # 12 runs of 5 cells (dz > 0, or dz = 0 and dy > 0) and the own run of 3 cells.
     cap = (12 * (2 * REACH + 1) + REACH + 1) * _fullest(start)
-    nblock = (nc[0] * nc[1] * nc[2] + BLOCK - 1) // BLOCK
+    nblock = _blocks(nc)
     needs = np.empty(nblock, dtype=np.int64)
     for blk in prange(nblock):
         needs[blk] = _half_block(blk, cap, x, frozen, L, periodic, nc, start, rlist2, half, nhalf)
