@@ -4,6 +4,7 @@ for AMW and for the piston, read from a run of ``config/target_cost.yaml``.
     .venv/bin/snakemake --cores 2 --configfile config/target_cost.yaml
     .venv/bin/python benchmarks/target_cost.py results_target_cost --out docs/figures
     .venv/bin/python benchmarks/target_cost.py results_target_cost --laws src/hugomap/cost_laws.json
+    .venv/bin/python benchmarks/target_cost.py --rows docs/figures/target_cost.jsonl --laws ...
 
 - **AMW** (scene ``tc_amw``) was asked for the tightest target and recorded, chunk by chunk of
   its steady average, the relative error of D it stated and the CPU it had spent, its loading
@@ -19,9 +20,11 @@ for AMW and for the piston, read from a run of ``config/target_cost.yaml``.
   (``pull``): a stated error is worth its CPU only if it holds.
 
 Output: JSON lines, one per (u_p, scheme, target), then one per point (``kind: point``), then
-one line per scheme with the cost law CPU = c t^m fitted over every u_p and target
+one line per scheme and u_p with the cost law CPU = c t^m fitted over that u_p's targets
 (``kind: law``), each with the machine; ``--out`` draws CPU against the target, one curve
-per scheme and u_p, with each piston run at its own stated error; ``--laws`` writes the laws as the cost data ``schemes: [auto]`` reads.
+per scheme and u_p, with each piston run at its own stated error; ``--laws`` writes the
+laws as the cost data ``schemes: [auto]`` reads. ``--rows`` reads the rows of an earlier
+run's ``target_cost.jsonl`` in place of its results folder (the laws refitted from them).
 """
 
 from __future__ import annotations
@@ -141,16 +144,37 @@ def piston_rows(points: list[dict], u_p: float) -> list[dict]:
 
 
 def laws(rows: list[dict]) -> list[dict]:
-    """Per scheme, CPU = c t^m over every u_p's targets that a run reached (a window) or that
-    lie inside the measured errors (the piston)."""
+    """Per scheme and u_p, CPU = c t^m over that u_p's targets that a run reached (a window)
+    or that lie inside the measured errors (the piston)."""
     out = []
     for scheme in sorted({r["scheme"] for r in rows}):
-        use = [r for r in rows if r["scheme"] == scheme and r["how"] in ("run", "interpolated")]
-        c, m = fit_law(np.array([r["cpu_s"] for r in use]), np.array([r["target_D"] for r in use]))
-        ts = [r["target_D"] for r in use]
-        out.append({"kind": "law", "scheme": scheme, "c": c, "m": m, "quantity": "D",
-                    "targets": [min(ts), max(ts)] if ts else [], "n": len(use)})  # fmt: skip
+        for u in sorted({r["u_p"] for r in rows if r["scheme"] == scheme}):
+            use = [r for r in rows if r["scheme"] == scheme and r["u_p"] == u
+                   and r["how"] in ("run", "interpolated")]  # fmt: skip
+            ts = np.array([r["target_D"] for r in use])
+            c, m = fit_law(np.array([r["cpu_s"] for r in use]), ts)
+            out.append({"kind": "law", "scheme": scheme, "u_p": u, "c": c, "m": m,
+                        "quantity": "D", "targets": [float(ts.min()), float(ts.max())]
+                        if use else [], "n": len(use)})  # fmt: skip
     return out
+
+
+def write_laws(law_rows: list[dict], machine: str, date: str, path: Path) -> None:
+    """The cost data ``schemes: [auto]`` reads (``hugomap.cost_laws``): per scheme its laws
+    at each u_p with finite c and m."""
+    md: dict[str, list] = {}
+    for r in law_rows:
+        if math.isfinite(r["c"]) and math.isfinite(r["m"]):
+            md.setdefault(r["scheme"], []).append(
+                {"u_p": r["u_p"], "c": r["c"], "m": r["m"], "targets": r["targets"]}
+            )
+    data = {
+        "about": "CPU a point needs to state D to a relative error t at a piston velocity "
+        "u_p [sigma/tau]: cpu_s = c t^m per u_p, measured by benchmarks/target_cost.py on "
+        "config/target_cost.yaml (LJ liquid, rho0 0.80, T0 2.0, a 10.3-sigma section)",
+        "machine": machine, "date": date, "solvers": {"md": md},
+    }  # fmt: skip
+    path.write_text(json.dumps(data, indent=2) + "\n")
 
 
 def draw(rows: list[dict], points: list[dict], out: Path) -> None:
@@ -194,19 +218,33 @@ def draw(rows: list[dict], points: list[dict], out: Path) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("root", type=Path, help="the results folder of config/target_cost.yaml")
+    ap.add_argument("root", type=Path, nargs="?",
+                    help="the results folder of config/target_cost.yaml")  # fmt: skip
+    ap.add_argument("--rows", type=Path,
+                    help="read the target and point rows of an earlier run's target_cost.jsonl "
+                         "instead of a results folder (the laws refitted, the machine kept)")  # fmt: skip
+    ap.add_argument("--date", help="the date of the run the rows come from (with --rows)")
     ap.add_argument("--out", type=Path, help="folder for target_cost.png and .jsonl")
     ap.add_argument("--laws", type=Path, help="write the cost laws here (JSON)")
     a = ap.parse_args()
-    points = [point(p) for p in sorted(a.root.glob("tc_*/up*/*.nc"))
-              if p.stem in ("amw", "piston")]  # fmt: skip
-    rows: list[dict] = []
-    for p in points:
-        if p["scheme"] == "amw" and "chunks" in p:
-            rows += window_rows(p)
-    for u in sorted({p["u_p"] for p in points if p["scheme"] == "piston"}):
-        rows += piston_rows(points, u)
-    mach = _machine()
+    if (a.root is None) == (a.rows is None):
+        ap.error("give a results folder or --rows, one of them")
+    if a.rows is not None:
+        old = [json.loads(line) for line in a.rows.read_text().splitlines() if line.strip()]
+        rows = [r for r in old if r["kind"] == "target"]
+        points = [r for r in old if r["kind"] == "point"]
+        mach = next((r["machine"] for r in old if "machine" in r), _machine())
+        date = a.date or datetime.date.fromtimestamp(a.rows.stat().st_mtime).isoformat()
+    else:
+        points = [point(p) for p in sorted(a.root.glob("tc_*/up*/*.nc"))
+                  if p.stem in ("amw", "piston")]  # fmt: skip
+        rows = []
+        for p in points:
+            if p["scheme"] == "amw" and "chunks" in p:
+                rows += window_rows(p)
+        for u in sorted({p["u_p"] for p in points if p["scheme"] == "piston"}):
+            rows += piston_rows(points, u)
+        mach, date = _machine(), datetime.date.today().isoformat()
     law_rows = laws(rows)
     lines = [*rows, *({k: v for k, v in p.items() if k != "chunks"} for p in points), *law_rows]
     for r in lines:
@@ -217,15 +255,7 @@ def main() -> None:
         (a.out / "target_cost.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
         draw(rows, points, a.out)
     if a.laws:
-        data = {
-            "about": "CPU a point needs to state D to a relative error t: cpu_s = c t^m, "
-            "measured by benchmarks/target_cost.py on config/target_cost.yaml (LJ liquid, "
-            "u_p 1 and 2, a 10.3-sigma section)",
-            "machine": mach, "date": datetime.date.today().isoformat(),
-            "solvers": {"md": {r["scheme"]: {"c": r["c"], "m": r["m"], "targets": r["targets"]}
-                               for r in law_rows if math.isfinite(r["c"])}},
-        }  # fmt: skip
-        a.laws.write_text(json.dumps(data, indent=2) + "\n")
+        write_laws(law_rows, mach, date, a.laws)
 
 
 if __name__ == "__main__":

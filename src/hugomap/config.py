@@ -353,10 +353,13 @@ def _unshare(cfg: dict) -> None:
 
 
 def _auto_scheme(name: str, sc: dict, cfg: dict) -> list[str]:
-    """``auto`` in the scene's schemes (its own or the top level's) becomes the scheme of
-    least CPU for its ``target.D`` by the measured cost laws (``cost_laws.choose``); the
-    scene then lists its schemes itself and says why in ``scheme_choice``. Refused: auto
-    without a ``target.D``, or for a solver the cost data has no laws for."""
+    """``auto`` in the scene's schemes (its own or the top level's) becomes, at each of its
+    piston velocities, the scheme of least CPU for its ``target.D`` by the measured cost
+    laws (``cost_laws.choose``): the scene then lists its schemes itself (the chosen ones in
+    the order of u_p, then those named beside auto), ``scheme_at`` the schemes run at each
+    u_p (parallel to ``shock.u_p``; ``scene_points``) and ``scheme_choice`` why (one reason
+    a u_p). Refused: auto without a ``target.D``, or for a solver the cost data has no laws
+    for."""
     schemes = _scene_schemes(sc, cfg)
     if AUTO not in schemes:
         return []
@@ -376,9 +379,11 @@ def _auto_scheme(name: str, sc: dict, cfg: dict) -> list[str]:
     if D is None:
         return [f"{at}: auto chooses by the CPU to state D to "
                 f"scenes.{name}.target.D, which is not given; allowed range (0, 1]"]  # fmt: skip
-    chosen, why = cost_laws.choose(solver, float(D), laws)
-    sc["schemes"] = list(dict.fromkeys(chosen if s == AUTO else s for s in schemes))
-    sc["scheme_choice"] = why
+    named = [s for s in schemes if s != AUTO]
+    picks = [cost_laws.choose(solver, float(D), float(u), laws) for u in sc["shock"]["u_p"]]
+    sc["scheme_at"] = [list(dict.fromkeys([chosen, *named])) for chosen, _ in picks]
+    sc["schemes"] = list(dict.fromkeys([*(chosen for chosen, _ in picks), *named]))
+    sc["scheme_choice"] = [why for _, why in picks]
     return []
 
 

@@ -1,4 +1,4 @@
-"""Config keys as text, point folder tags and config hashes.
+"""Config keys as text, point folder tags, a scene's points and config hashes.
 
 The small helpers that the config validation, the campaign's expansion, the solvers'
 scene checks (``md.scene_config``, ``sph.scene_config``), ``status`` and ``io.dataset`` share.
@@ -122,6 +122,30 @@ def room_after_loading(base: str, shock: dict, L_x: float, box: str, unit: str =
         f"after loading, (1 - shock.load_fraction) L_x = {at} with "
         f"shock.load_fraction = {shock['load_fraction']} for {box}"
     ]
+
+
+def scene_points(scene: dict, top_schemes: list | None = None) -> list[tuple[str, float]]:
+    """The (scheme, u_p) points a validated scene runs, scheme by scheme (the scene's
+    ``schemes``, else ``top_schemes``, the config's), each at its u_p in the config's order:
+    every u_p, or where ``schemes: [auto]`` chose per u_p (``scheme_at``, parallel to
+    ``shock.u_p``) those it chose there."""
+    ups = [float(u) for u in scene["shock"]["u_p"]]
+    schemes = list(scene.get("schemes", top_schemes or ["piston"]))
+    per = scene.get("scheme_at") or [schemes] * len(ups)
+    return [(s, u) for s in schemes for u, here in zip(ups, per, strict=True) if s in here]
+
+
+def scheme_choice_at(scene: dict, u_p: float) -> str:
+    """Why ``schemes: [auto]`` chose what it did at ``u_p`` (``scheme_choice``; a single
+    reason holds at every u_p); "" where the scene's schemes were named."""
+    why = scene.get("scheme_choice")
+    if not why:
+        return ""
+    if isinstance(why, str):
+        return why
+    ups = [float(u) for u in scene["shock"]["u_p"]]
+    k = min(range(len(ups)), key=lambda i: abs(ups[i] - float(u_p)))
+    return str(why[k])
 
 
 def config_hash(obj: Any) -> str:

@@ -331,10 +331,12 @@ def scene_status(
     u_values: list[float] | None,
     now: float | None = None,
     schemes: list[str] | None = None,
+    schemes_at: dict[str, list[str]] | None = None,
 ) -> dict[str, Any]:
     """The state of every point of one scene, one per piston velocity and scheme
     (``u_values``, ``schemes`` from the config; None: what is found on disk, the piston
-    where a point folder shows no scheme yet), with counts (all points and per scheme) and
+    where a point folder shows no scheme yet; ``schemes_at``: the schemes at each u_p's tag
+    where ``schemes: [auto]`` chose per u_p), with counts (all points and per scheme) and
     the scene-level files."""
     results = Path(results)
     wanted = {point_tag(u): float(u) for u in (u_values or [])}
@@ -342,10 +344,11 @@ def scene_status(
     points = []
     for tag, u in {**wanted, **on_disk}.items():
         here = _disk_schemes(results, scene, tag)
-        if schemes is None:
+        want = (schemes_at or {}).get(tag, schemes)
+        if want is None:
             todo = [(s, True) for s in (here or ["piston"])]
         else:
-            todo = [(s, True) for s in schemes] + [(s, False) for s in here if s not in schemes]
+            todo = [(s, True) for s in want] + [(s, False) for s in here if s not in want]
         for s, listed in todo:
             p = point_status(results, scene, u, now, s)
             p.in_config = listed and (u_values is None or tag in wanted)
@@ -365,6 +368,7 @@ def scene_status(
         "scene": scene,
         "schemes": used,
         "n_u_p": len({p.tag for p in points}),
+        "chosen_per_u_p": bool(schemes_at),
         "counts": _counts(points),
         "counts_by_scheme": {s: _counts([p for p in points if p.scheme == s]) for s in used},
         "sample": sample_state,
@@ -384,7 +388,7 @@ def sweep_status(
     if config is not None:
         top = config.get("schemes", ["piston"])
         scenes = {
-            name: (sc["shock"]["u_p"], _schemes(sc.get("schemes", top)))
+            name: (sc["shock"]["u_p"], _schemes(sc.get("schemes", top)), _chosen(sc))
             for name, sc in config["scenes"].items()
         }
     else:
@@ -396,7 +400,7 @@ def sweep_status(
             if d.is_dir() and d.name not in RESERVED
         ]
         scenes = {
-            name: (None, None)
+            name: (None, None, None)
             for name in sorted(
                 {
                     d.name
@@ -409,14 +413,22 @@ def sweep_status(
     return {
         "results": str(results),
         "scenes": [
-            scene_status(results, name, ups, now, schemes)
-            for name, (ups, schemes) in scenes.items()
+            scene_status(results, name, ups, now, schemes, at)
+            for name, (ups, schemes, at) in scenes.items()
         ],
     }
 
 
 def _schemes(s: Any) -> list[str] | None:
     return None if s is None else list(s)
+
+
+def _chosen(sc: dict) -> dict[str, list[str]] | None:
+    """The schemes ``schemes: [auto]`` chose at each u_p's tag (``scheme_at``), or None."""
+    at = sc.get("scheme_at")
+    if not isinstance(at, list) or len(at) != len(sc["shock"]["u_p"]):
+        return None
+    return {point_tag(u): list(h) for u, h in zip(sc["shock"]["u_p"], at, strict=True)}
 
 
 def _recorded(path: Path, key: str) -> dict | None:
@@ -577,9 +589,13 @@ def format_table(report: dict[str, Any], width: int | None = None) -> str:
             ]
         )
         schemes = sc.get("schemes") or []
+        n_u = sc.get("n_u_p", c["total"])
+        grid = f"{n_u} u_p x {len(schemes)} schemes"
+        if sc.get("chosen_per_u_p"):  # schemes: [auto] chose per u_p
+            grid = f"{n_u} u_p, schemes chosen per u_p"
         out.append(
-            f"\nscene {sc['scene']}: {c['total']} points ({sc.get('n_u_p', c['total'])} u_p x "
-            f"{len(schemes)} schemes: {', '.join(schemes)}): {_counts_text(c)}; {files}"
+            f"\nscene {sc['scene']}: {c['total']} points ({grid}: {', '.join(schemes)}): "
+            f"{_counts_text(c)}; {files}"
         )
         if len(schemes) > 1:
             w = max(len(s) for s in schemes)

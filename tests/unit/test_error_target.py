@@ -17,6 +17,7 @@ import yaml
 
 from hugomap import cost_laws
 from hugomap.config import TOL_PER_TARGET, ConfigError, validate_config
+from hugomap.keys import scene_points, scheme_choice_at
 from hugomap.methods.steady import steady_state
 from hugomap.methods.target import (
     K_DEFAULT,
@@ -201,24 +202,67 @@ LAWS = {
 
 def test_auto_takes_the_cheaper_law_at_the_target():
     """cpu = c t^m: the piston's t^-2 against the window's t^-1 cross at t = 0.1 %; looser
-    targets go to the piston, tighter ones to AMW, and the reason quotes both costs."""
-    assert cost_laws.choose("md", 0.005, LAWS)[0] == "piston"
-    scheme, why = cost_laws.choose("md", 0.0005, LAWS)
+    targets go to the piston, tighter ones to AMW, and the reason quotes both costs. A law
+    without u_p holds at every u_p."""
+    assert cost_laws.choose("md", 0.005, 1.0, LAWS)[0] == "piston"
+    scheme, why = cost_laws.choose("md", 0.0005, 3.0, LAWS)
     assert scheme == "amw"
-    assert "amw, 2e+03 s a point against piston 4e+03 s" in why
+    assert "auto at u_p = 3: amw, 2e+03 s a point against piston 4e+03 s" in why
     assert "extrapolated" in why  # 0.05 % lies outside the measured 0.1-1 %
+    assert "extrapolated" not in cost_laws.choose("md", 0.005, 3.0, LAWS)[1]
     with pytest.raises(KeyError):
-        cost_laws.choose("csph", 0.01, LAWS)
+        cost_laws.choose("csph", 0.01, 1.0, LAWS)
+
+
+# Laws measured at two u_p: the piston's cost at 0.5 % falls 100 -> 10 s from u_p 1 to 3,
+# the window's stays 30 s; log-linear in u_p between them, they cross where
+# log 100 + w (log 10 - log 100) = log 30, w = log(10/3) / log 10 = 0.523, u_p = 2.05.
+PER_U = {
+    "machine": "test", "date": "2026-12-07",
+    "solvers": {"md": {
+        "piston": [{"u_p": 1.0, "c": 100.0 * 0.005**2, "m": -2.0, "targets": [0.001, 0.01]},
+                   {"u_p": 3.0, "c": 10.0 * 0.005**2, "m": -2.0, "targets": [0.001, 0.01]}],
+        "amw": [{"u_p": 1.0, "c": 30.0 * 0.005, "m": -1.0, "targets": [0.001, 0.01]},
+                {"u_p": 3.0, "c": 30.0 * 0.005, "m": -1.0, "targets": [0.001, 0.01]}],
+    }},
+}  # fmt: skip
+
+
+def test_auto_interpolates_the_laws_in_u_p():
+    """Between the measured u_p the log of the cost is linear in u_p (the worked crossing
+    above), beyond them the nearest u_p's law holds and the reason says it extrapolated."""
+    piston = PER_U["solvers"]["md"]["piston"]
+    assert cost_laws.cost(piston, 0.005, 1.0) == (pytest.approx(100.0), True)
+    assert cost_laws.cost(piston, 0.005, 2.0)[0] == pytest.approx(math.sqrt(100.0 * 10.0))
+    assert cost_laws.cost(piston, 0.005, 4.0) == (pytest.approx(10.0), False)
+    assert cost_laws.cost(piston, 0.005, 0.5) == (pytest.approx(100.0), False)
+    assert cost_laws.choose("md", 0.005, 2.0, PER_U)[0] == "amw"
+    assert cost_laws.choose("md", 0.005, 2.1, PER_U)[0] == "piston"
+    scheme, why = cost_laws.choose("md", 0.005, 0.5, PER_U)
+    assert scheme == "amw" and "measured at u_p 1, 3" in why and "extrapolated" in why
+    assert "extrapolated" not in cost_laws.choose("md", 0.005, 1.5, PER_U)[1]
 
 
 def test_auto_is_resolved_before_any_job(monkeypatch):
-    """The scene lists the chosen scheme itself and says why; auto without target.D, or for
-    a solver the cost data has no laws for, is refused naming the key."""
+    """The scene lists the chosen schemes itself, which at each u_p, and why; auto without
+    target.D, or for a solver the cost data has no laws for, is refused naming the key."""
     monkeypatch.setattr(cost_laws, "load", lambda: LAWS)
     sc = _scene(_cfg(schemes=["auto"], target={"D": 0.005}))
-    assert sc["schemes"] == ["piston"] and sc["scheme_choice"].startswith("auto: piston")
+    assert sc["schemes"] == ["piston"] and sc["scheme_at"] == [["piston"]] * 3
+    assert [w.split(":")[0] for w in sc["scheme_choice"]] == [
+        "auto at u_p = 2", "auto at u_p = 3", "auto at u_p = 4"]  # fmt: skip
+    assert scheme_choice_at(sc, 3.0).startswith("auto at u_p = 3: piston")
     sc = _scene(_cfg(schemes=["auto", "amw"], target={"D": 0.0005}))
     assert sc["schemes"] == ["amw"]
+    monkeypatch.setattr(cost_laws, "load", lambda: PER_U)
+    cfg = _cfg(schemes=["auto", "mw"], target={"D": 0.005})
+    next(iter(cfg["scenes"].values()))["shock"]["u_p"] = [1.0, 2.0, 3.0]
+    sc = _scene(cfg)
+    assert sc["schemes"] == ["amw", "piston", "mw"]
+    assert sc["scheme_at"] == [["amw", "mw"], ["amw", "mw"], ["piston", "mw"]]
+    assert scene_points(sc) == [("amw", 1.0), ("amw", 2.0), ("piston", 3.0),
+                                ("mw", 1.0), ("mw", 2.0), ("mw", 3.0)]  # fmt: skip
+    assert scheme_choice_at(sc, 3.0).startswith("auto at u_p = 3: piston, 10 s")
     with pytest.raises(ConfigError) as exc:
         _scene(_cfg(schemes=["auto"], target={"P": 0.005}))
     assert (
@@ -232,13 +276,28 @@ def test_auto_is_resolved_before_any_job(monkeypatch):
     assert "none for solver 'md'" in str(exc.value)
 
 
+def test_named_schemes_run_at_every_u_p():
+    """Without auto a scene's points are every scheme (here the config's, inherited) at every
+    u_p, scheme by scheme."""
+    cfg = validate_config(_cfg(schemes=["piston", "amw"]))
+    sc = next(iter(cfg["scenes"].values()))
+    assert "scheme_at" not in sc and scheme_choice_at(sc, 2.0) == ""
+    assert scene_points(sc, cfg["schemes"]) == [
+        (s, u) for s in ("piston", "amw") for u in (2.0, 3.0, 4.0)
+    ]
+
+
 def test_the_shipped_cost_laws_choose_the_piston_loose_and_the_window_tight():
     """The measured laws (LJ liquid, benchmarks/target_cost.py) carry their machine and
     date, and their curves cross between 1 % and 0.1 %: the piston at 1 %, AMW at 0.1 %
-    (measured at u_p 1 and 2: piston 9-65 s against AMW 62-85 s at 1 %, 1060-3796 s against
-    118-140 s at 0.1 %)."""
+    (measured: piston 9-65 s against AMW 62-85 s at 1 %, 1060-3796 s against 118-140 s
+    at 0.1 %); at 0.5 % the weak shock goes to AMW (u_p 1: 93 s against the piston's
+    221 s), the stronger to the piston (u_p 2: 37 s against 62 s)."""
     data = cost_laws.load()
     assert data["machine"] and data["date"] and cost_laws.finite_laws(data)
     assert cost_laws.solvers_with_laws(data) == ["md"]
-    assert cost_laws.choose("md", 0.01, data)[0] == "piston"
-    assert cost_laws.choose("md", 0.001, data)[0] == "amw"
+    for u in (1.0, 2.0):
+        assert cost_laws.choose("md", 0.01, u, data)[0] == "piston"
+        assert cost_laws.choose("md", 0.001, u, data)[0] == "amw"
+    assert cost_laws.choose("md", 0.005, 1.0, data)[0] == "amw"
+    assert cost_laws.choose("md", 0.005, 2.0, data)[0] == "piston"

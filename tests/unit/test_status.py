@@ -560,3 +560,22 @@ def test_a_piston_run_again_says_on_what_sample(tmp_path: Path) -> None:
     text = format_table(sweep_status(tmp_path, _config(), now=NOW))
     row = next(ln for ln in text.splitlines() if ln.split()[:2] == ["0.5", "piston"])
     assert "D ± 0.1 %, P ± 0.2 % (target D 0.2 %, second run, on a sample 1.4 × as long)" in row
+
+
+def test_schemes_chosen_per_u_p_are_the_points_expected(tmp_path: Path) -> None:
+    """Where ``schemes: [auto]`` chose per u_p (``scheme_at``), each u_p expects only its
+    own schemes: the counts are those points, and the header says the grid is not full."""
+    cfg = _config()
+    sc = cfg["scenes"]["tiny"]
+    ups = sc["shock"]["u_p"]
+    sc["schemes"] = ["amw", "piston"]
+    sc["scheme_at"] = [["amw"]] + [["piston"]] * (len(ups) - 1)
+    _point(tmp_path / "tiny" / f"up{ups[0]:g}" / "amw.nc", "ok", "", ups[0])
+    report = sweep_status(tmp_path, cfg, now=NOW)
+    (scene,) = report["scenes"]
+    assert scene["counts"]["total"] == len(ups)
+    assert list(_by_tag(scene, "amw")) == [f"{ups[0]:g}"]
+    assert list(_by_tag(scene, "piston")) == [f"{u:g}" for u in ups[1:]]
+    assert f"{len(ups)} points ({len(ups)} u_p, schemes chosen per u_p: amw, piston)" in (
+        format_table(report)
+    )

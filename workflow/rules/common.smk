@@ -3,6 +3,8 @@ import json
 import math
 from pathlib import Path
 
+from hugomap.keys import scene_points
+
 PY = sys.executable
 RES = config["results"]  # validated: the default "results" filled in
 
@@ -19,14 +21,11 @@ def scene_json(wildcards):
 
 
 def point_files(wildcards):
-    """One point file per scheme of the config and piston velocity of the scene."""
-    ups = config["scenes"][wildcards.scene]["shock"]["u_p"]
+    """One point file per scheme and piston velocity of the scene (hugomap.keys.scene_points:
+    every scheme at every u_p, or what schemes: [auto] chose at each)."""
     return [
         f"{RES}/{wildcards.scene}/up{up_tag(u)}/{scheme}.nc"
-        for scheme in config["scenes"][wildcards.scene].get(
-            "schemes", config["schemes"]
-        )
-        for u in ups
+        for scheme, u in scene_points(config["scenes"][wildcards.scene], config["schemes"])
     ]
 
 
@@ -45,12 +44,10 @@ def all_targets():
         ]
         if scene in made:
             continue
-        schemes = config["scenes"][scene].get("schemes", config["schemes"])
         out += [
             f"{RES}/figures/{scene}/up{up_tag(u)}_{scheme}_history.png"
-            for scheme in schemes
+            for scheme, u in scene_points(config["scenes"][scene], config["schemes"])
             if scheme not in ("piston", "msst", "nphug")  # no control history
-            for u in config["scenes"][scene]["shock"]["u_p"]
         ]
     if "campaign" in config:  # its dataset and figures (rule campaign)
         out += list(campaign_outputs().values())

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import os
 import resource
 import time
@@ -15,6 +16,7 @@ import xarray as xr
 from ..failures import MEASURED
 from ..io.atomic import mpi_size, write_netcdf
 from ..io.dataset import point_dataset, scalar_vars
+from ..keys import scheme_choice_at
 from ..methods.piston import History
 from ..states import Pole
 
@@ -112,8 +114,9 @@ def write_point(
                        scene, backend.units)  # fmt: skip
     if extra:
         ds = ds.assign(extra)
-    if scene.get("scheme_choice"):  # schemes: [auto] (config): which scheme and why
-        ds.attrs["scheme_choice"] = str(scene["scheme_choice"])
+    why = scheme_choice_at(scene, values.get("piston_velocity", math.nan))
+    if why:  # schemes: [auto] (config): which scheme and why
+        ds.attrs["scheme_choice"] = why
     ds.attrs.update(attrs or {})
     return write_netcdf(ds, out)
 
