@@ -14,7 +14,7 @@ import xarray as xr  # noqa: E402
 from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter  # noqa: E402
 
 from .failures import MEASURED  # noqa: E402
-from .io.dataset import jump_velocity  # noqa: E402
+from .io.dataset import NOT_RUN, jump_velocity  # noqa: E402
 
 
 def _labels(ds: xr.Dataset, scene: str) -> dict:
@@ -94,7 +94,7 @@ def hugoniot_figures(
             ok = drawn & (status == "ok")
             nc = drawn & (status == "not_converged")
             tnr = drawn & (status == "target_not_reached")
-            failed = ~np.isin(status, (*MEASURED, "", "nan"))
+            failed = ~np.isin(status, (*MEASURED, NOT_RUN, "", "nan"))
             if ok.any():
                 ax.errorbar(x[ok], y[ok], xerr=xe[ok], yerr=ye[ok], fmt="o", color=color,
                             label=f"{sch} ({text['tag']})")  # fmt: skip

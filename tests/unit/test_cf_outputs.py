@@ -31,6 +31,7 @@ from hugomap.config import ConfigError, validate_config
 from hugomap.io.atomic import write_json, write_netcdf
 from hugomap.io.checkpoint import MD_CHECKPOINT, MD_WINDOW_CHECKPOINT, seal_checkpoint
 from hugomap.io.dataset import (
+    NOT_RUN,
     POINT_VARS,
     POLE_VARS,
     STATUS_FLAGS,
@@ -154,6 +155,36 @@ def test_point_aggregate_and_campaign_pass_cf_1_11(tmp_path: Path, cf_errors) ->
     files = [agg, tmp_path / "md" / "amw_2.5.nc", aggs[0], camp]
     for f in files:
         assert cf_errors(f) == [], f
+
+
+def test_an_aggregate_of_schemes_chosen_per_u_p(tmp_path: Path, cf_errors) -> None:
+    """Where ``schemes: [auto]`` chose AMW at one u_p and the piston at the other, the
+    aggregate's cells without a point are ``not_run`` (text and flag), NaN and not
+    converged, each u_p says in ``scheme_choice`` why, and the file is still CF-1.11."""
+    cfg = _md_config(units=None)
+    sc = cfg["scenes"]["tiny"]
+    sc["schemes"], sc["scheme_at"] = ["amw", "piston"], [["amw"], ["piston"]]
+    sc["scheme_choice"] = ["auto at u_p = 1.5: amw, 9 s", "auto at u_p = 2.5: piston, 5 s"]
+    pts = _md_points(tmp_path, cfg)
+    keep = [str(p) for p in pts if p.name in ("amw_1.5.nc", "piston_2.5.nc")]
+    ref = _md_reference(tmp_path / "reference.nc", 3)
+    agg = aggregate(keep, str(ref), cfg, "tiny", tmp_path / "tiny.nc")
+    ds = xr.load_dataset(agg)
+    run = {"amw": 1.5, "piston": 2.5}
+    for s in ("amw", "piston"):
+        for u in (1.5, 2.5):
+            cell = ds.sel(scheme=s, u_p=u)
+            meanings = cell["status_flag"].attrs["flag_meanings"].split()
+            if run[s] == u:
+                assert str(cell["status"].values) != NOT_RUN and np.isfinite(float(cell["D"]))
+            else:
+                assert str(cell["status"].values) == NOT_RUN == meanings[int(cell["status_flag"])]
+                assert np.isnan(float(cell["D"])) and int(cell["converged"]) == 0
+                assert "schemes: [auto] chose another" in str(cell["diagnostic"].values)
+    assert list(ds["scheme_choice"].values) == sc["scheme_choice"]
+    with xr.open_dataset(keep[0]) as one:  # a point file says why its scheme ran there
+        assert one.attrs["scheme_choice"] == "auto at u_p = 2.5: piston, 5 s"
+    assert cf_errors(agg) == []
 
 
 def test_a_file_written_the_old_way_fails_the_check(tmp_path: Path, cf_errors) -> None:

@@ -29,8 +29,9 @@ rule prepare_sample:
 
 
 # Priorities (higher first when cores free up): a loading checkpoint unlocks every point at
-# its u_p, and a piston job is the longest of a sweep where it runs a second time, so
-# starting both early keeps a core from idling at the end.
+# its u_p; the reference, one long job, and a piston job, the longest of a sweep where it
+# runs a second time, go before the windows' shorter jobs, so no core idles at the end
+# while one long job finishes.
 rule load_to_target:
     input:
         f"{RES}/{{scene}}/sample.nc",
@@ -38,7 +39,7 @@ rule load_to_target:
         f"{RES}/{{scene}}/up{{up}}/loaded.nc",
     log:
         f"{RES}/logs/{{scene}}/up{{up}}/load.log",
-    priority: 2
+    priority: 3
     conda:
         "../envs/hugomap.yaml"
     threads: stage_threads("load")
@@ -92,6 +93,7 @@ rule shared_reference:
         f"{RES}/logs/references/{{key}}.log",
     wildcard_constraints:
         key="[a-z]+_[0-9a-f]{12}",
+    priority: 2
     conda:
         "../envs/hugomap.yaml"
     threads: 1

@@ -262,8 +262,11 @@ REFERENCES = (
     "(VANT), ser. Mathematical modelling of physical processes, 2025, no. 1 (the moving-window "
     "method and its control schemes)"
 )
+#: The status of an aggregate's (scheme, u_p) that has no point: not run there
+#: (``schemes: [auto]`` chose another scheme at that u_p).
+NOT_RUN = "not_run"
 #: ``status_flag`` codes: index into this tuple (a status not listed is ``unregistered``).
-STATUS_FLAGS: tuple[str, ...] = (*MEASURED, *FAILURES, "unregistered")
+STATUS_FLAGS: tuple[str, ...] = (*MEASURED, *FAILURES, NOT_RUN, "unregistered")
 CONVERGED_FLAGS = {"flag_values": np.array([0, 1], np.int8),
                    "flag_meanings": "not_converged converged"}  # fmt: skip
 
