@@ -25,7 +25,9 @@ def point_files(wildcards):
     every scheme at every u_p, or what schemes: [auto] chose at each)."""
     return [
         f"{RES}/{wildcards.scene}/up{up_tag(u)}/{scheme}.nc"
-        for scheme, u in scene_points(config["scenes"][wildcards.scene], config["schemes"])
+        for scheme, u in scene_points(
+            config["scenes"][wildcards.scene], config["schemes"]
+        )
     ]
 
 
