@@ -192,6 +192,8 @@ def load_schema(path: str | Path | None = None) -> dict:
         # auto, the scheme chosen from measured costs (refused where a solver has none)
         props = defs[f"{name}_scene"]["properties"]
         props["target"] = {"$ref": "#/$defs/target"}
+        props["scheme_at"] = {"$ref": "#/$defs/scheme_at"}
+        props["scheme_choice"] = {"$ref": "#/$defs/scheme_choice"}
         enum = props.get("schemes", {}).get("items", {}).get("enum")
         if isinstance(enum, list) and AUTO not in enum:
             enum.append(AUTO)
@@ -362,7 +364,7 @@ def _auto_scheme(name: str, sc: dict, cfg: dict) -> list[str]:
     for."""
     schemes = _scene_schemes(sc, cfg)
     if AUTO not in schemes:
-        return []
+        return _given_scheme_at(name, sc, schemes)
     at = key_path(("scenes", name, "schemes"))
     if "schemes" not in sc:  # inherited: name the key that was set
         at = f"schemes = {_show(schemes)}, inherited as {at}"
@@ -385,6 +387,25 @@ def _auto_scheme(name: str, sc: dict, cfg: dict) -> list[str]:
     sc["schemes"] = list(dict.fromkeys([*(chosen for chosen, _ in picks), *named]))
     sc["scheme_choice"] = [why for _, why in picks]
     return []
+
+
+def _given_scheme_at(name: str, sc: dict, schemes: list) -> list[str]:
+    """A ``scheme_at`` given without auto (a config resolved before, validated again, or
+    one that runs fewer schemes at some u_p) must give each u_p of ``shock.u_p`` schemes of
+    the scene's, and ``scheme_choice`` one reason a u_p."""
+    ups = sc["shock"]["u_p"]
+    problems = []
+    for key in ("scheme_at", "scheme_choice"):
+        given = sc.get(key)
+        if given is not None and len(given) != len(ups):
+            problems.append(f"{key_path(('scenes', name, key))}: {len(given)} entries for "
+                            f"{len(ups)} u_p in scenes.{name}.shock.u_p; give one a u_p")  # fmt: skip
+    for i, here in enumerate(sc.get("scheme_at") or []):
+        stray = [s for s in here if s not in schemes]
+        if stray:
+            problems.append(f"{key_path(('scenes', name, 'scheme_at', i))} = {_show(here)}: "
+                            f"{_show(stray)} not in the scene's schemes {_show(schemes)}")  # fmt: skip
+    return problems
 
 
 def _own_residual_tol(cfg: dict) -> set:

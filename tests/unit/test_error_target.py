@@ -301,3 +301,25 @@ def test_the_shipped_cost_laws_choose_the_piston_loose_and_the_window_tight():
         assert cost_laws.choose("md", 0.001, u, data)[0] == "amw"
     assert cost_laws.choose("md", 0.005, 1.0, data)[0] == "amw"
     assert cost_laws.choose("md", 0.005, 2.0, data)[0] == "piston"
+
+
+def test_a_resolved_choice_validates_again_and_a_bad_one_is_refused():
+    """The shipped config (``schemes: [auto]``) validated twice gives the same config; a
+    ``scheme_at`` with a scheme the scene does not run, or not one entry a u_p, is refused
+    naming the key."""
+    cfg = validate_config(yaml.safe_load((QUICK.parent / "config.yaml").read_text()))
+    assert validate_config(copy.deepcopy(cfg)) == cfg
+    sc = cfg["scenes"]["lj_liquid"]
+    assert sc["scheme_at"][0] == ["amw"] and sc["scheme_at"][-1] == ["piston"]
+    bad = copy.deepcopy(cfg)
+    bad["scenes"]["lj_liquid"]["scheme_at"][0] = ["mw"]
+    with pytest.raises(ConfigError) as exc:
+        validate_config(bad)
+    assert "scenes.lj_liquid.scheme_at[0] = ['mw']: ['mw'] not in the scene's schemes" in str(
+        exc.value
+    )
+    bad = copy.deepcopy(cfg)
+    bad["scenes"]["lj_liquid"]["scheme_choice"] = ["one reason"]
+    with pytest.raises(ConfigError) as exc:
+        validate_config(bad)
+    assert "scenes.lj_liquid.scheme_choice: 1 entries for 5 u_p" in str(exc.value)
