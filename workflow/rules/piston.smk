@@ -29,9 +29,8 @@ rule prepare_sample:
 
 
 # Priorities (higher first when cores free up): a loading checkpoint unlocks every point at
-# its u_p; the reference, one long job, and a piston job, the longest of a sweep where it
-# runs a second time, go before the windows' shorter jobs, so no core idles at the end
-# while one long job finishes.
+# its u_p, and a piston job is the longest of a sweep where it runs a second time, so
+# starting both early keeps a core from idling at the end.
 rule load_to_target:
     input:
         f"{RES}/{{scene}}/sample.nc",
@@ -39,7 +38,7 @@ rule load_to_target:
         f"{RES}/{{scene}}/up{{up}}/loaded.nc",
     log:
         f"{RES}/logs/{{scene}}/up{{up}}/load.log",
-    priority: 3
+    priority: 2
     conda:
         "../envs/hugomap.yaml"
     threads: stage_threads("load")
@@ -93,7 +92,6 @@ rule shared_reference:
         f"{RES}/logs/references/{{key}}.log",
     wildcard_constraints:
         key="[a-z]+_[0-9a-f]{12}",
-    priority: 2
     conda:
         "../envs/hugomap.yaml"
     threads: 1
