@@ -136,13 +136,11 @@ def scene_points(scene: dict, top_schemes: list | None = None) -> list[tuple[str
 
 
 def scheme_choice_at(scene: dict, u_p: float) -> str:
-    """Why ``schemes: [auto]`` chose what it did at ``u_p`` (``scheme_choice``; a single
-    reason holds at every u_p); "" where the scene's schemes were named."""
+    """Why ``schemes: [auto]`` chose what it did at ``u_p`` (``scheme_choice``, parallel to
+    ``shock.u_p``); "" where the scene's schemes were named."""
     why = scene.get("scheme_choice")
     if not why:
         return ""
-    if isinstance(why, str):
-        return why
     ups = [float(u) for u in scene["shock"]["u_p"]]
     k = min(range(len(ups)), key=lambda i: abs(ups[i] - float(u_p)))
     return str(why[k])

@@ -42,7 +42,7 @@ import xarray as xr
 
 from .config import load_config
 from .failures import MEASURED
-from .keys import point_tag
+from .keys import point_tag, scene_points
 from .methods.target import ErrorTarget
 
 DONE_STATES = MEASURED
@@ -388,7 +388,7 @@ def sweep_status(
     if config is not None:
         top = config.get("schemes", ["piston"])
         scenes = {
-            name: (sc["shock"]["u_p"], _schemes(sc.get("schemes", top)), _chosen(sc))
+            name: (sc["shock"]["u_p"], _schemes(sc.get("schemes", top)), _chosen(sc, top))
             for name, sc in config["scenes"].items()
         }
     else:
@@ -423,12 +423,15 @@ def _schemes(s: Any) -> list[str] | None:
     return None if s is None else list(s)
 
 
-def _chosen(sc: dict) -> dict[str, list[str]] | None:
-    """The schemes ``schemes: [auto]`` chose at each u_p's tag (``scheme_at``), or None."""
-    at = sc.get("scheme_at")
-    if not isinstance(at, list) or len(at) != len(sc["shock"]["u_p"]):
+def _chosen(sc: dict, top: list[str]) -> dict[str, list[str]] | None:
+    """The schemes ``schemes: [auto]`` chose at each u_p's tag (``keys.scene_points`` of a
+    scene with ``scheme_at``), or None."""
+    if not sc.get("scheme_at"):
         return None
-    return {point_tag(u): list(h) for u, h in zip(sc["shock"]["u_p"], at, strict=True)}
+    at: dict[str, list[str]] = {}
+    for s, u in scene_points(sc, top):
+        at.setdefault(point_tag(u), []).append(s)
+    return at
 
 
 def _recorded(path: Path, key: str) -> dict | None:

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import logging
-import math
 import os
 import resource
 import time
@@ -114,7 +113,7 @@ def write_point(
                        scene, backend.units)  # fmt: skip
     if extra:
         ds = ds.assign(extra)
-    why = scheme_choice_at(scene, values.get("piston_velocity", math.nan))
+    why = scheme_choice_at(scene, values["piston_velocity"])
     if why:  # schemes: [auto] (config): which scheme and why
         ds.attrs["scheme_choice"] = why
     ds.attrs.update(attrs or {})
