@@ -382,6 +382,31 @@ def test_P_error_takes_only_the_flow_beyond_its_noise():
     assert seen_zero
 
 
+def test_P_error_takes_half_the_momentum_gap_beyond_its_noise():
+    """The slab's P 0.6 % above the Rayleigh line P0 + ρ0 D u_p = 4 with little noise: the
+    two measures of the jump's pressure part by 0.024, 10+ of their errors, so P's error
+    gains half of it (0.012), whatever its block error says. Exact jumps under noise: a gap
+    within its noise adds nothing (P_closure_err = ½ √max(0, gap² − σ²), as D's front-model
+    term)."""
+    from hugomap.analysis.shock import beyond_noise, measure_point
+
+    h, pole = _toy_run(0.006, 0.0005)
+    r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                      residual_tol=0.01)  # fmt: skip
+    assert r["P_closure_err"] == pytest.approx(0.5 * 0.006 * 4.0, rel=0.1)
+    assert r["P_err"] >= r["P_closure_err"] > 10 * r["P_flow_err"]
+    seen_zero = False
+    for seed in range(6):
+        h, pole = _toy_run(0.0, 0.002, seed=seed)
+        r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,
+                          residual_tol=0.01)  # fmt: skip
+        scale = r["D"] * r["u_p_jump"]  # ρ0 (D − 0)(u − 0): P − P_rh per unit residual
+        gap, noise = r["residual_momentum"] * scale, r["residual_momentum_err"] * scale
+        assert r["P_closure_err"] == pytest.approx(0.5 * beyond_noise(gap, noise), abs=1e-12)
+        seen_zero |= abs(gap) <= noise and r["P_closure_err"] == 0.0
+    assert seen_zero
+
+
 def test_pores_left_open_in_a_steady_slab_are_not_a_cause():
     """A steady, uniform porous slab at distention 1.05 is a Hugoniot state of the porous
     body (Herrmann's P–α form): no cause is named for it; pores still closing show as a

@@ -468,6 +468,11 @@ def measure_point(
         acoustic motion whose pressure swings P's block error already holds (replica study
         of the default liquid, 8 seeds: with ρ0 D σ_flow the pooled reduced χ² of P was 0.40,
         its errors 1.6 times the seeds' scatter; with this rule 0.79 over every scheme).
+        The slab's P and the Rayleigh line's P1 + ρ1 (D − u1)(u − u1) are two measures of
+        the jump's pressure; where they part by more than the noise of the momentum
+        residual, P's error gains half the excess in quadrature (``P_closure_err``), as D's
+        gains half its front models' disagreement: a ring of the slab slower than the
+        blocks escapes P's block error but not the closure (docs/window-methods.md).
         With ``u_p_from = "slab"`` (the window methods) the jump is taken at the slab's own
         velocity instead, ``u_p_jump`` = u_p_measured ± its error, P's error is its own and
         the flow a diagnostic, not a closure: a window's outflow boundary holds the shocked
@@ -668,6 +673,13 @@ def measure_point(
     out.update({f"residual_{k}": v for k, v in res.items()})
     res_err = jump_residual_errors(vals, errs, cov=cov)
     out.update({f"residual_{k}_err": v for k, v in res_err.items()})
+    # The slab's P and the Rayleigh line's P1 + ρ1 (D − u1)(u − u1) measure the same jump's
+    # pressure: where they part by more than their noise, one is off, and P's error takes
+    # half the excess (as D's takes half the front models' disagreement)
+    rayleigh = vals["rho1"] * (D - vals["u1"]) * (u_jump - vals["u1"])
+    P_closure = 0.5 * beyond_noise(res["momentum"] * rayleigh, res_err["momentum"] * abs(rayleigh))
+    out["P_closure_err"] = float(P_closure)
+    out["P_err"] = float(np.hypot(out["P_err"], P_closure))
     n_ok = int(np.isfinite(_field(behind, "rho")).sum())
     out["n_samples"] = n_ok
     finite = all(np.isfinite(v) for v in (D, u_jump, rho, P, E))

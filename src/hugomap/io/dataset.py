@@ -106,6 +106,11 @@ POINT_VARS: dict[str, tuple[str, str]] = {
         "rho0 D sqrt(max(0, (u_p_measured - u_p)^2 - u_p_measured_err^2)); 0 for a window "
         "point (its jump is taken at the slab's velocity)",
     ),
+    "P_closure_err": (
+        P_UNIT,
+        "part of P_err from the momentum closure beyond its noise: half of "
+        "sqrt(max(0, (P - P_rh)^2 - its error^2)), P_rh the Rayleigh line's pressure",
+    ),
     "D_rel_err": ("1", "relative standard error of D, D_err / D"),
     "P_rel_err": ("1", "relative standard error of the stress jump, P_err / |P - P0|"),
     "target_D": ("1", "the scene's target for D_rel_err (NaN: none asked)"),
