@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hugomap.analysis.shock import jump_residual_errors, jump_residuals
+from hugomap.analysis.jump import jump_residual_errors, jump_residuals
 
 
 def _behind(rho1, P1, E1, u1, D, u):
@@ -296,7 +296,8 @@ def test_a_slab_swaying_along_its_rayleigh_line_has_correlated_u_and_P_errors():
     (u_p_P_corr > 0.95) and the momentum residual at the slab's u, exact on average, gets
     an error a fraction of the one that treats them as independent; that error still
     covers the residual."""
-    from hugomap.analysis.shock import jump_residual_errors, measure_point
+    from hugomap.analysis.jump import jump_residual_errors
+    from hugomap.analysis.shock import measure_point
 
     h, pole = _toy_run(0.0, 0.0002, sway=0.01, exact_at_slab=True)
     r = measure_point(h, _ToyProfile(), pole, 1.0, 0.0, gap=3.0, avg_length=20.0,

@@ -1,4 +1,4 @@
-"""Shock-front tracking, shocked-state averaging and the Rankine–Hugoniot jump conditions.
+"""Shock-front tracking, shocked-state averaging and the measurement of a Hugoniot point.
 
 One analysis for every backend and scheme: the front is tracked on the per-bin flow velocity,
 the states behind and ahead of it are slabs of whole bins read by the backend's ``Profile``
@@ -8,14 +8,9 @@ measured from the samples of a run (a piston's drive, a window's steady average)
 velocity) and ``u_behind`` (the shocked material's, set by the piston or the window's outflow)
 are known exactly, so D = (front speed) − u_ahead and u_p = u_behind − u_ahead.
 
-Jump conditions across a steady front moving at D into material at rest (Zel'dovich &
-Raizer, ch. I §17), with u_p the particle-velocity jump and V = 1/ρ:
-    mass:      ρ0 D = ρ (D − u_p)
-    momentum:  P − P0 = ρ0 D u_p          (P: longitudinal component P_xx)
-    energy:    E − E0 = ½ (P + P0)(V0 − V)
-``jump_residuals`` returns each as a relative residual (0 when it holds exactly). A steady
-shocked slab is also at rest relative to the boundary behind it (the piston, the window's
-outflow): ``measure_point`` checks that as a fourth closure, ``residual_flow``.
+The jump conditions and their residuals are ``analysis.jump``'s. A steady shocked slab is
+also at rest relative to the boundary behind it (the piston, the window's outflow):
+``measure_point`` checks that as a fourth closure, ``residual_flow``.
 """
 
 from __future__ import annotations
@@ -34,6 +29,7 @@ from .causes import (
     residual_text,
     shear_stress,
 )
+from .jump import jump_residual_errors, jump_residuals, rayleigh_jump
 from .stats import (
     CorrelatedSlope,
     block_average,
@@ -269,74 +265,6 @@ def relaxation_length(
     behind = (x < x_front) & (x > x_min) & np.isfinite(P)
     off = behind & (np.abs(P - P_slab) > tol * abs(P_slab - P0))
     return float(x_front - x[off].min()) if off.any() else 0.0
-
-
-def jump_residuals(
-    rho1: float,
-    P1: float,
-    E1: float,
-    D: float,
-    u: float,
-    rho: float,
-    P: float,
-    E: float,
-    u1: float = 0.0,
-) -> dict[str, float]:
-    """Relative residuals of the three jump conditions (module docstring).
-
-    The state ahead of the front is (ρ1, P1, E1) moving at u1 (the pole at rest by default;
-    the elastic precursor's state when a plastic wave follows one), the state behind it
-    (ρ, P, E) moving at u, the front at D (all velocities in the frame of the pole material):
-    mass = ρ(D − u)/(ρ1(D − u1)) − 1;  momentum = (P − P1)/(ρ1 (D − u1)(u − u1)) − 1;
-    energy = (E − E1)/(½(P + P1)(V1 − V)) − 1.
-    """
-    V1, V = 1.0 / rho1, 1.0 / rho
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return {
-            "mass": float(rho * (D - u) / (rho1 * (D - u1)) - 1.0),
-            "momentum": float((P - P1) / (rho1 * (D - u1) * (u - u1)) - 1.0),
-            "energy": float((E - E1) / (0.5 * (P + P1) * (V1 - V)) - 1.0),
-        }
-
-
-_JUMP_ARGS = ("rho1", "P1", "E1", "D", "u", "rho", "P", "E", "u1")
-
-
-def jump_residual_errors(
-    values: dict[str, float],
-    errors: dict[str, float],
-    rel_step: float = 1e-6,
-    cov: dict[tuple[str, str], float] | None = None,
-) -> dict[str, float]:
-    """Standard errors of ``jump_residuals`` by first-order propagation.
-
-    ``values``/``errors`` are keyed by the arguments of ``jump_residuals`` (rho1, P1, E1, D,
-    u, rho, P, E, u1; missing errors count as 0); ``cov`` holds the covariances of pairs
-    of them that are measured together (the slab's u and P: ``measure_point``), the rest
-    independent: σ_r² = Σ (∂r/∂x σ_x)² + 2 Σ_pairs ∂r/∂x ∂r/∂y cov(x, y), the derivatives
-    taken by central differences.
-    """
-    base = {k: float(values.get(k, 0.0)) for k in _JUMP_ARGS}
-    keys = ("mass", "momentum", "energy")
-    cov = cov or {}
-    wanted = {n for pair in cov for n in pair}
-    var = {k: 0.0 for k in keys}
-    grad: dict[str, dict[str, float]] = {}
-    for name in _JUMP_ARGS:
-        sx = float(errors.get(name, 0.0) or 0.0)
-        if not (sx > 0 or name in wanted):
-            continue
-        h = rel_step * max(abs(base[name]), 1.0)
-        up = jump_residuals(**{**base, name: base[name] + h})
-        dn = jump_residuals(**{**base, name: base[name] - h})
-        grad[name] = {k: (up[k] - dn[k]) / (2 * h) for k in keys}
-        for k in keys:
-            var[k] += (grad[name][k] * (sx if sx > 0 else 0.0)) ** 2
-    for (a, b), c in cov.items():
-        if a != b and np.isfinite(c) and a in grad and b in grad:
-            for k in keys:
-                var[k] += 2.0 * grad[a][k] * grad[b][k] * c
-    return {k: float(np.sqrt(max(v, 0.0))) for k, v in var.items()}
 
 
 # Rules of the point measurement, the same for every backend and scheme.
@@ -616,7 +544,7 @@ def measure_point(
     out["P_err"] = float(np.hypot(P_stat, P_flow))
     out["V"] = 1.0 / rho
     out["V_err"] = out["rho_err"] / rho**2
-    out["P_rh"] = P0 + pole.rho0 * D * u_jump
+    out["P_rh"] = P0 + rayleigh_jump(pole.rho0, D, u_jump)
     out["P_rh_err"] = float(pole.rho0 * np.hypot(abs(u_jump) * D_err, abs(D) * u_jump_err) + P0_err)
     out["E_minus_E0"] = E - pole.E0
     out["E_minus_E0_err"] = float(np.hypot(out["E_err"], pole.E0_err))
@@ -676,7 +604,7 @@ def measure_point(
     # The slab's P and the Rayleigh line's P1 + ρ1 (D − u1)(u − u1) measure the same jump's
     # pressure: where they part by more than their noise, one is off, and P's error takes
     # half the excess (as D's takes half the front models' disagreement)
-    rayleigh = vals["rho1"] * (D - vals["u1"]) * (u_jump - vals["u1"])
+    rayleigh = rayleigh_jump(vals["rho1"], D, u_jump, vals["u1"])
     P_closure = 0.5 * beyond_noise(res["momentum"] * rayleigh, res_err["momentum"] * abs(rayleigh))
     out["P_closure_err"] = float(P_closure)
     out["P_err"] = float(np.hypot(out["P_err"], P_closure))

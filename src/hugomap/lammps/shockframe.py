@@ -38,8 +38,9 @@ energy exactly, velocities scaled, as the window's inflow reservoir); a target w
 quarter of the average misses u_p by more than ``PROBE_MISS`` is not averaged further. The
 averages are block averages of the samples (``analysis.stats.block_average``, 8 blocks); the
 errors of u_p and D are those of their per-sample values, with the pole's errors added by
-first-order propagation (``rayleigh_errors``). The jump residuals are ``analysis.shock.jump_residuals`` of
-the measured state against the pole, with ``jump_residual_errors``; the point is ``ok`` when
+first-order propagation (``rayleigh_errors``). The jump residuals are
+``analysis.jump.jump_residuals`` of the measured state against the pole, with
+``jump_residual_errors``; the point is ``ok`` when
 each closes (``analysis.causes.closes``: within ``shock.residual_tol`` and 3 of its error) and
 the measured u_p is within the same of the scene's u_p; else ``not_converged``, the
 diagnostic naming what did not close.
@@ -68,8 +69,8 @@ from ..analysis.causes import (
     residual_text,
     shear_stress,
 )
+from ..analysis.jump import jump_residual_errors, jump_residuals
 from ..analysis.linear_hugoniot import shock_velocity
-from ..analysis.shock import jump_residual_errors, jump_residuals
 from ..analysis.stats import block_average
 from ..failures import SolverUnstable, StageFailed
 from ..particles.fcc import lattice_constant
@@ -141,7 +142,7 @@ class Params:
 def rayleigh(P: float, V: float, P0: float, V0: float) -> tuple[float, float]:
     """(u_p, D) of a state (P_xx, V) on the Rayleigh line through the pole (P0, V0), per unit
     mass (V specific volume): u_p = √((P − P0)(V0 − V)), D = V0 √((P − P0)/(V0 − V)) (mass and
-    momentum jump conditions, ``analysis.shock``'s module docstring); NaN for a state that is
+    momentum jump conditions, ``analysis.jump``'s module docstring); NaN for a state that is
     not compressed by a positive stress jump."""
     dP, dV = P - P0, V0 - V
     if not (dP > 0 and dV > 0):
@@ -337,7 +338,7 @@ def box_pole(series: dict[str, np.ndarray], n: int, conv: Native) -> Pole:
 
 def residuals(state: dict[str, float], pole: Pole) -> tuple[dict[str, float], dict[str, float]]:
     """The three jump residuals of ``state`` (D, u_p, ρ, P, E) against the pole
-    (``analysis.shock.jump_residuals``) and their errors (``jump_residual_errors``)."""
+    (``analysis.jump.jump_residuals``) and their errors (``jump_residual_errors``)."""
     vals = {"rho1": pole.rho0, "P1": pole.P0, "E1": pole.E0, "D": state["D"],
             "u": state["u_p"], "rho": state["rho"], "P": state["P"], "E": state["E"],
             "u1": 0.0}  # fmt: skip
